@@ -1,0 +1,5 @@
+"""barrierjax: differentiable impact-dynamics models for highway barriers, in JAX."""
+
+from . import hinge
+
+__all__ = ["hinge"]

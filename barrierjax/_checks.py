@@ -1,0 +1,47 @@
+"""Input validation that names the offending field.
+
+Concrete inputs are checked eagerly and raise `ValueError`; traced inputs (inside
+`jit`, `vmap` or `grad`) are checked at run time with `equinox.error_if`, so a bad
+value never propagates silently into NaN.
+"""
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jax.core import Tracer
+
+
+def _is_traced(value) -> bool:
+    return isinstance(value, Tracer)
+
+
+def _fail(name: str, rule: str, value) -> ValueError:
+    return ValueError(f"{name} must be {rule}; got {np.asarray(value).tolist()!r}")
+
+
+def check(name: str, value, predicate, rule: str):
+    """Return `value` as an array after checking `predicate(value)` elementwise."""
+    if _is_traced(value):
+        ok = predicate(value)
+        return eqx.error_if(value, ~jnp.all(ok), f"{name} must be {rule}")
+    array = np.asarray(value, dtype=float)
+    with np.errstate(invalid="ignore"):
+        ok = predicate(array)
+    if not np.all(ok):
+        raise _fail(name, rule, value)
+    return jnp.asarray(value, dtype=jnp.result_type(float))
+
+
+def positive(name: str, value):
+    """Finite and strictly positive."""
+    return check(name, value, lambda x: (x > 0) & (x < jnp.inf), "positive and finite")
+
+
+def non_negative(name: str, value):
+    """Finite and non-negative."""
+    return check(name, value, lambda x: (x >= 0) & (x < jnp.inf), "non-negative and finite")
+
+
+def in_range(name: str, value, low: float, high: float):
+    """In the half-open interval (low, high]."""
+    return check(name, value, lambda x: (x > low) & (x <= high), f"in ({low:g}, {high:g}]")

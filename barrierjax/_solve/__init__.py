@@ -1,0 +1,1 @@
+"""Shared numerical kernels: quadrature rules and the phase-switching ODE driver."""

@@ -1,0 +1,71 @@
+"""The phase-switching ODE driver: one `diffeqsolve` per phase, ending on a real-valued event.
+
+A phase is a pure vector field plus a real-valued switching function; the phase ends
+where that function crosses zero, located by a Newton root find on the solver's dense
+interpolant so that the switching time carries an exact gradient (a boolean event would
+give a zero one).
+"""
+
+import diffrax
+import equinox as eqx
+import optimistix as optx
+from jaxtyping import Array, Float
+
+
+class PhaseSolution(eqx.Module):
+    """The end of one phase and, if requested, its dense interpolant."""
+
+    t_end: Float[Array, ""]
+    y_end: Float[Array, " state"]
+    dense: diffrax.Solution | None
+
+
+def solve_phase(
+    vector_field,
+    y0,
+    t0,
+    t_bound,
+    args,
+    *,
+    switch=None,
+    solver: diffrax.AbstractSolver,
+    rtol: float,
+    atol: float,
+    dense: bool = False,
+    max_steps: int = 16384,
+) -> PhaseSolution:
+    """Integrate `vector_field(t, y, args)` from `t0` until `switch(t, y, args)` crosses
+    zero, or to `t_bound` when there is no switch.
+
+    With a switch, `t_bound` must lie beyond it; reaching it without switching is an
+    error (raised at run time with `equinox.error_if`), never a silent truncation.
+    """
+    event = None
+    if switch is not None:
+        root_tol = 1e-3 * rtol
+        event = diffrax.Event(
+            lambda t, y, args, **kwargs: switch(t, y, args),
+            root_finder=optx.Newton(rtol=root_tol, atol=root_tol),
+        )
+    solution = diffrax.diffeqsolve(
+        diffrax.ODETerm(vector_field),
+        solver,
+        t0=t0,
+        t1=t_bound,
+        dt0=None,
+        y0=y0,
+        args=args,
+        saveat=diffrax.SaveAt(t1=True, dense=dense),
+        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
+        event=event,
+        max_steps=max_steps,
+        throw=True,
+    )
+    t_end = solution.ts[-1]
+    if switch is not None:
+        t_end = eqx.error_if(
+            t_end,
+            ~solution.event_mask,
+            "phase ended at its time bound without reaching its switching condition",
+        )
+    return PhaseSolution(t_end=t_end, y_end=solution.ys[-1], dense=solution if dense else None)

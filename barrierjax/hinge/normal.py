@@ -1,0 +1,621 @@
+r"""Normal impact of a rigid-plastic vehicle on a rigid-plastic beam on a rigid-plastic backing.
+
+Report section 3.2. A beam of mass m per unit length and plastic moment M0 rests on a
+backing that yields at q0 per unit length; a vehicle of mass M that crushes at the force
+P0 strikes it at speed v. Dimensionless variables (ERRATA.md, after 3.2.8):
+
+    length L = 2 (M0/q0)^(1/2),  force P_b = 4 (M0 q0)^(1/2),
+    time t0 = m^(1/2) M0^(1/4) / q0^(3/4),  velocity L/t0,  energy P_b L,
+    mass ratio mu = M / (m L),  force ratio phi = P0 / P_b.
+
+Equations of motion of the deforming half-beam 0 < x < xi(t), with its velocity field
+v = v0 (1 - x/xi) (3.2.1), re-derived from (3.2.3)-(3.2.4) (ERRATA: (3.2.8) misprinted):
+
+    a        = 2P/(m xi) - 12 M0/(m xi^2) - q0/m                    (3.2.7)
+    v0 dxi/dt = 12 M0/(m xi) - q0 xi/m - P/m                          (3.2.8, corrected)
+
+Accelerative phase (P = P0, xi fixed): q0 xi^2 + P0 xi - 12 M0 = 0 (ERRATA for 3.2.10), so
+
+    S* = (phi^2 + 3)^(1/2) - phi,   V' = (phi - S*)/S*,   vehicle V_v' = -phi/mu,   (3.2.11)-(3.2.12)
+
+until the velocities meet at T* = mu V0 S* / (phi S* + mu (phi - S*)) (3.2.14), with
+V* = (phi - S*) T* / S* (3.2.13) and W* = (phi - S*) T*^2 / (2 S*).
+
+Decelerative phase (vehicle and beam move together, P = -M a):
+
+    V'  = -(S^2 + 3) / (2 S (S + 2 mu))                               (3.2.15)
+    V S' = -p(S) / (2 S (S + 2 mu)),  p(S) = S^3 + 3 mu S^2 - 3 S - 3 mu     (3.2.16)
+         = -(S - alpha)(S + beta)(S + gamma) ...                      (3.2.17)
+
+whose quotient integrates to V(S) (3.2.18)-(3.2.19) and gives T(S) by quadrature
+(3.2.20). The motion stops when S reaches alpha, the positive root of p, at T**.
+
+Vehicle damage (crush) is D = V0 T* / 2, so D / V0^2 = T* / (2 V0): the printed closed
+form for D / V0^2 lacks this factor 1/2 (ERRATA).
+
+Energy (in units of P_b L): the vehicle's kinetic energy mu V0^2 / 2 equals the crush
+work phi D, the backing work (1/2) integral V S dT, the hinge work (1/2) integral V/S dT
+(four hinges dissipate 4 M0 v0/xi) and the beam's kinetic energy V^2 S / 3.
+
+Both methods work in the speed-free variables tau = T/V0, v = V/V0, w = W/V0^2 (the
+report's own observation after 3.2.20: for fixed S, T and V are proportional to V0 and
+W to V0^2), so the speed only rescales the answer and every member of a batch costs the
+same whatever its speed.
+
+`method="closed_form"`: the integrals in S are split at S_m = S* + (alpha - S*)/4. On
+[S*, S_m] a Gauss rule in z = ln(S + beta) resolves the near-singular factor
+(S + beta)^(B - 1) of light, hard-hit barriers; on [S_m, alpha] product integration
+integrates the end singularity (alpha - S)^(A - 1) (or ^(2A - 1) for displacement and
+work) exactly, in place of the report's truncated series for the last step.
+
+`method="ode"`: diffrax, one solve per phase. The accelerative phase ends on a
+real-valued event (the relative velocity of vehicle and beam). In time T, the
+decelerative phase is singular at its end (S' -> 0/0 as V -> 0, and S(T) is not smooth
+there); with the independent variable sigma = ln(V*/V) and the state chi = A ln(alpha - S)
+it is smooth and non-stiff for every mass ratio, so it is integrated to
+sigma_end = ln(1/rtol) + 3 and the last e^-sigma_end of the velocity is added analytically
+(`_complete_at_rest`).
+"""
+
+import functools
+import math
+from typing import Literal
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .. import _checks
+from .._solve.phases import solve_phase
+from .._solve.quadrature import gauss_legendre, jacobi_product_nodes, jacobi_product_weights
+
+Scalar = Float[Array, ""]
+Vector = Float[Array, " n"]
+
+
+class NormalImpactHistory(eqx.Module):
+    """Time histories of a normal impact, dimensionless (report 3.2 scales).
+
+    The first half of the samples covers the accelerative phase, the second the
+    decelerative phase. Energies are in units of P_b L.
+    """
+
+    time: Vector
+    vehicle_velocity: Vector
+    barrier_velocity: Vector
+    hinge: Vector
+    displacement: Vector
+    contact_force: Vector
+    crush: Vector
+    backing_work: Vector
+    hinge_work: Vector
+    beam_kinetic_energy: Vector
+    vehicle_kinetic_energy: Vector
+
+
+class NormalImpact(eqx.Module):
+    """Result of `normal_impact`, dimensionless (report 3.2 notation in brackets).
+
+    - `s_star, t_star, v_star, w_star`: hinge distance, time, beam velocity and beam
+      displacement under the vehicle at the end of the accelerative phase (S*, T*, V*, W*);
+    - `damage`: vehicle crush D;
+    - `s_final, t_final, w_final`: final hinge distance (alpha), time of rest (T**) and
+      final displacement under the vehicle;
+    - `crush_work, backing_work, hinge_work`: where the vehicle's kinetic energy
+      mu V0^2 / 2 went, in units of P_b L;
+    - `history`: a `NormalImpactHistory`, or None when not requested.
+
+    With force ratio <= 1 the barrier stays rigid (no hinge: S = 0, W = 0) and the
+    vehicle alone crushes to rest.
+    """
+
+    s_star: Scalar
+    t_star: Scalar
+    v_star: Scalar
+    w_star: Scalar
+    damage: Scalar
+    s_final: Scalar
+    t_final: Scalar
+    w_final: Scalar
+    crush_work: Scalar
+    backing_work: Scalar
+    hinge_work: Scalar
+    history: NormalImpactHistory | None
+
+
+# --------------------------------------------------------------------------------------
+# Accelerative phase, (3.2.9)-(3.2.14), per unit impact speed.
+
+
+class _Accelerative(eqx.Module):
+    s_star: Scalar
+    acceleration: Scalar  # beam, (phi - S*)/S*
+    deceleration: Scalar  # vehicle, phi/mu
+    t_star: Scalar
+    v_star: Scalar
+    w_star: Scalar
+
+
+def _accelerative_phase(mu, phi) -> _Accelerative:
+    root = jnp.sqrt(phi**2 + 3.0)
+    s_star = 3.0 / (root + phi)  # = root - phi without cancellation at large phi
+    # (phi - S*)/S* with phi - S* = 3 (phi^2 - 1)/(2 phi + root), exact as phi -> 1+.
+    acceleration = 3.0 * (phi - 1.0) * (phi + 1.0) / ((2.0 * phi + root) * s_star)
+    deceleration = phi / mu
+    t_star = 1.0 / (acceleration + deceleration)
+    return _Accelerative(
+        s_star=s_star,
+        acceleration=acceleration,
+        deceleration=deceleration,
+        t_star=t_star,
+        v_star=acceleration * t_star,
+        w_star=0.5 * acceleration * t_star**2,
+    )
+
+
+# --------------------------------------------------------------------------------------
+# Decelerative phase, (3.2.15)-(3.2.20).
+
+
+@jax.custom_jvp
+def _largest_root(mu):
+    """alpha: the positive root of p(S) = S^3 + 3 mu S^2 - 3 S - 3 mu, in [1, sqrt(3)].
+
+    p is increasing and convex on [1, inf) and p(sqrt 3) = 6 mu >= 0, so Newton's method
+    from sqrt(3) decreases monotonically onto alpha; eight steps reach rounding for every
+    mu >= 0. Differentiated implicitly, not through the iterations.
+    """
+
+    def newton(s, _):
+        p = s**3 + 3.0 * mu * s**2 - 3.0 * s - 3.0 * mu
+        dp = 3.0 * s**2 + 6.0 * mu * s - 3.0
+        return s - p / dp, None
+
+    start = jnp.full_like(mu, jnp.sqrt(3.0))
+    return jax.lax.scan(newton, start, None, length=8)[0]
+
+
+@_largest_root.defjvp
+def _largest_root_jvp(primals, tangents):
+    (mu,), (dmu,) = primals, tangents
+    alpha = _largest_root(mu)
+    # dp/dS dalpha + dp/dmu dmu = 0
+    return alpha, -(alpha**2 - 1.0) / (alpha**2 + 2.0 * mu * alpha - 1.0) * dmu
+
+
+class _Decelerative(eqx.Module):
+    mu: Scalar
+    alpha: Scalar
+    beta: Scalar
+    gamma: Scalar
+    a: Scalar  # exponents of (3.2.19)
+    b: Scalar
+    c: Scalar
+    s_star: Scalar
+    v_star: Scalar
+
+    def log_ratio(self, s):
+        """B ln((S+beta)/(S*+beta)) + C ln((S+gamma)/(S*+gamma))."""
+        return self.b * jnp.log1p((s - self.s_star) / (self.s_star + self.beta)) + self.c * jnp.log1p(
+            (s - self.s_star) / (self.s_star + self.gamma)
+        )
+
+    def rates(self, s):
+        """(F, v~) with dtau/dS = F u^(A-1)/(alpha - S*) and v = v~ u^A, u = (alpha-S)/(alpha-S*)."""
+        v_tilde = self.v_star * jnp.exp(self.log_ratio(s))
+        f = 2.0 * s * (s + 2.0 * self.mu) / ((s + self.beta) * (s + self.gamma)) * v_tilde
+        return f, v_tilde
+
+
+def _decelerative_constants(mu, acc: _Accelerative) -> _Decelerative:
+    alpha = _largest_root(mu)
+    # Vieta: beta + gamma = 3 mu + alpha, beta gamma = 3 mu / alpha (no cancellation).
+    total = 3.0 * mu + alpha
+    gamma = 0.5 * (total + jnp.sqrt(total**2 - 12.0 * mu / alpha))
+    beta = 3.0 * mu / (alpha * gamma)
+    return _Decelerative(
+        mu=mu,
+        alpha=alpha,
+        beta=beta,
+        gamma=gamma,
+        a=(3.0 + alpha**2) / ((alpha + beta) * (alpha + gamma)),
+        b=(3.0 + beta**2) / ((alpha + beta) * (beta - gamma)),
+        c=(3.0 + gamma**2) / ((gamma + alpha) * (gamma - beta)),
+        s_star=acc.s_star,
+        v_star=acc.v_star,
+    )
+
+
+def _integrands(s, f, v_tilde):
+    """Integrands of (tau, w, backing work, hinge work) in S, without the weight u^(A-1)
+    (index 0) or u^(2A-1) (indices 1-3) that the caller supplies."""
+    dv = f * v_tilde
+    return jnp.stack([f, dv, 0.5 * dv * s, 0.5 * dv / s], axis=-1)
+
+
+def _head_integrals(dec: _Decelerative, s_end, n: int):
+    """(tau, w, backing, hinge) integrated over [S*, s_end], s_end < alpha, by Gauss in
+    z = ln(S + beta), where dS = (S + beta) dz."""
+    z, weights = gauss_legendre(n, jnp.log(dec.s_star + dec.beta), jnp.log(s_end + dec.beta))
+    s = jnp.exp(z) - dec.beta
+    f, v_tilde = dec.rates(s)
+    u = (dec.alpha - s) / (dec.alpha - dec.s_star)
+    ua = u**dec.a
+    weight = jnp.stack([ua / u, ua * ua / u, ua * ua / u, ua * ua / u], axis=-1)
+    integrand = _integrands(s, f, v_tilde) * weight / (dec.alpha - dec.s_star)
+    return jnp.sum(integrand * ((s + dec.beta) * weights)[..., None], axis=-2)
+
+
+def _tail_integrals(dec: _Decelerative, s_start, n: int):
+    """(tau, w, backing, hinge) integrated over [s_start, alpha] by product integration
+    with the exact weights r^(A-1) and r^(2A-1), r = (alpha - S)/(alpha - s_start)."""
+    h = dec.alpha - s_start
+    s = dec.alpha - h[..., None] * jacobi_product_nodes(n)
+    f, v_tilde = dec.rates(s)
+    rho_a = jnp.exp(dec.a * jnp.log(h / (dec.alpha - dec.s_star)))[..., None]
+    weights_1 = jacobi_product_weights(n, dec.a - 1.0) * rho_a
+    weights_2 = jacobi_product_weights(n, 2.0 * dec.a - 1.0) * rho_a**2
+    integrand = _integrands(s, f, v_tilde)
+    return jnp.stack(
+        [jnp.sum(integrand[..., 0] * weights_1, -1)]
+        + [jnp.sum(integrand[..., k] * weights_2, -1) for k in (1, 2, 3)],
+        axis=-1,
+    )
+
+
+def _split_point(dec: _Decelerative):
+    return dec.s_star + 0.25 * (dec.alpha - dec.s_star)
+
+
+def _quadrature_points(rtol: float) -> int:
+    """Nodes per segment: the rule converges geometrically (ratio >= ~2.7 over the
+    property-test range), so digits grow linearly with nodes."""
+    return int(min(48, max(8, round(-2.5 * math.log10(rtol)))))
+
+
+# --------------------------------------------------------------------------------------
+# Closed form.
+
+
+def _closed_form(mu, phi, *, rtol, n_history):
+    acc = _accelerative_phase(mu, phi)
+    dec = _decelerative_constants(mu, acc)
+    n = _quadrature_points(rtol)
+    s_mid = _split_point(dec)
+    tau, w, backing, hinge = _head_integrals(dec, s_mid, n) + _tail_integrals(dec, s_mid, n)
+    t_star, w_star, s_star = acc.t_star, acc.w_star, acc.s_star
+    final = dict(
+        s_final=dec.alpha,
+        t_final=t_star + tau,
+        w_final=w_star + w,
+        backing_work=0.5 * w_star * s_star + backing,
+        hinge_work=0.5 * w_star / s_star + hinge,
+    )
+    history = None
+    if n_history:
+        history = _closed_form_history(acc, dec, n, s_mid, final, n_history)
+    return acc, final, history
+
+
+def _closed_form_history(acc, dec, n, s_mid, final, n_history):
+    """Accelerative phase on a uniform grid in T; decelerative phase on a grid uniform in
+    u^A (about uniform in V near rest), each point by the better-conditioned of
+    "head from S*" or "total minus tail to alpha"."""
+    k = jnp.linspace(0.0, 1.0, n_history)
+    t1 = acc.t_star * k
+    v1 = acc.acceleration * t1
+    w1 = 0.5 * acc.acceleration * t1**2
+    first = dict(
+        time=t1,
+        vehicle_velocity=1.0 - acc.deceleration * t1,
+        barrier_velocity=v1,
+        hinge=jnp.full_like(t1, acc.s_star),
+        displacement=w1,
+        backing_work=0.5 * w1 * acc.s_star,
+        hinge_work=0.5 * w1 / acc.s_star,
+    )
+    u_a = 1.0 - k  # (alpha - S)^A / (alpha - S*)^A
+    s = dec.alpha - (dec.alpha - dec.s_star) * jnp.where(u_a > 0, u_a, 1.0) ** (1.0 / dec.a)
+    s = jnp.where(u_a > 0, s, dec.alpha)
+    head = _head_integrals(dec, jnp.minimum(s, s_mid), n)
+    totals = jnp.stack(
+        [final["t_final"] - acc.t_star, final["w_final"] - acc.w_star]
+        + [final[key] - first[key][-1] for key in ("backing_work", "hinge_work")]
+    )
+    tail = totals - _tail_integrals(dec, jnp.maximum(s, s_mid), n)
+    cumulative = jnp.where((s <= s_mid)[:, None], head, tail)
+    v2 = dec.v_star * u_a * jnp.exp(dec.log_ratio(s))
+    second = dict(
+        time=acc.t_star + cumulative[:, 0],
+        vehicle_velocity=v2,
+        barrier_velocity=v2,
+        hinge=s,
+        displacement=acc.w_star + cumulative[:, 1],
+        backing_work=first["backing_work"][-1] + cumulative[:, 2],
+        hinge_work=first["hinge_work"][-1] + cumulative[:, 3],
+    )
+    return {key: jnp.concatenate([first[key], second[key]]) for key in first}
+
+
+# --------------------------------------------------------------------------------------
+# Time integration with diffrax.
+
+
+def _accelerative_field(t, y, args):
+    """State (vehicle velocity, beam velocity, w, crush, backing work, hinge work)."""
+    acc = args
+    vehicle, beam = y[0], y[1]
+    return jnp.stack(
+        [
+            -acc.deceleration,
+            acc.acceleration,
+            beam,
+            vehicle - beam,
+            0.5 * beam * acc.s_star,
+            0.5 * beam / acc.s_star,
+        ]
+    )
+
+
+def _decelerative_field(sigma, y, args):
+    """(3.2.15)-(3.2.16) with sigma = ln(V*/V) as the independent variable.
+
+    State (chi = A ln(alpha - S), tau, w, backing work, hinge work). With V = V* e^-sigma,
+
+        dtau/dsigma = V * 2 S (S + 2 mu) / (S^2 + 3)
+        dchi/dsigma = -A (S + beta)(S + gamma) / (S^2 + 3)      (= A p(S) / ((S^2+3)(alpha-S)))
+
+    Both are smooth and non-stiff for every mass ratio: chi falls at a rate near 1, and
+    alpha - S = exp(chi / A) underflows harmlessly where A is small (heavy vehicles).
+    """
+    dec = args
+    chi = y[0]
+    s = dec.alpha - jnp.exp(chi / dec.a)
+    v = dec.v_star * jnp.exp(-sigma)
+    dtau = v * 2.0 * s * (s + 2.0 * dec.mu) / (s**2 + 3.0)
+    dw = v * dtau
+    return jnp.stack(
+        [
+            -dec.a * (s + dec.beta) * (s + dec.gamma) / (s**2 + 3.0),
+            dtau,
+            dw,
+            0.5 * dw * s,
+            0.5 * dw / s,
+        ]
+    )
+
+
+def _complete_at_rest(dec, sigma_end, y_end):
+    """Add the motion from V_end = V* e^-sigma_end to rest analytically.
+
+    Past sigma_end, alpha - S = exp(chi/A) <= (alpha - S*) e^-sigma_end, so S is frozen to
+    that relative accuracy and V' is constant: the remainders are V_end g, V_end^2 g / 2,
+    ... with g = 2 S (S + 2 mu) / (S^2 + 3); their relative error is O(e^-2 sigma_end).
+    """
+    chi, tau, w, backing, hinge = y_end
+    s = dec.alpha - jnp.exp(chi / dec.a)
+    v = dec.v_star * jnp.exp(-sigma_end)
+    g = 2.0 * s * (s + 2.0 * dec.mu) / (s**2 + 3.0)
+    dw = 0.5 * v**2 * g
+    return s, tau + v * g, w + dw, backing + 0.5 * dw * s, hinge + 0.5 * dw / s
+
+
+def _ode(mu, phi, *, rtol, n_history, solver):
+    acc = _accelerative_phase(mu, phi)
+    dec = _decelerative_constants(mu, acc)
+    dtype = acc.t_star.dtype
+    options = dict(solver=solver, rtol=rtol, atol=1e-3 * rtol, dense=bool(n_history))
+    zero = jnp.zeros((), dtype)
+    first = solve_phase(
+        _accelerative_field,
+        jnp.stack([jnp.ones((), dtype), zero, zero, zero, zero, zero]),
+        zero,
+        2.0 * acc.t_star,  # a bracket for the switch, which the event locates
+        acc,
+        switch=lambda t, y, args: y[0] - y[1],
+        **options,
+    )
+    t_star = first.t_end
+    _, v_star, w_star, crush, backing, hinge = first.y_end
+    acc = eqx.tree_at(lambda a: (a.t_star, a.v_star, a.w_star), acc, (t_star, v_star, w_star))
+    dec = eqx.tree_at(lambda d: d.v_star, dec, v_star)
+    sigma_end = math.log(1.0 / rtol) + 3.0
+    second = solve_phase(
+        _decelerative_field,
+        jnp.stack([dec.a * jnp.log(dec.alpha - acc.s_star), t_star, w_star, backing, hinge]),
+        zero,
+        jnp.asarray(sigma_end, dtype),
+        dec,
+        **options,
+    )
+    s_final, t_final, w_final, backing, hinge = _complete_at_rest(dec, sigma_end, second.y_end)
+    final = dict(
+        s_final=s_final,
+        t_final=t_final,
+        w_final=w_final,
+        backing_work=backing,
+        hinge_work=hinge,
+        damage=crush,
+    )
+    history = None
+    if n_history:
+        history = _ode_history(first, second, dec, final, n_history)
+    return acc, final, history
+
+
+def _ode_history(first, second, dec, final, n_history):
+    """Accelerative phase uniform in T; decelerative phase uniform in V, ending at rest."""
+    k = jnp.linspace(0.0, 1.0, n_history)
+    t1 = first.t_end * k
+    y1 = jax.vmap(first.dense.evaluate)(t1)
+    sigma = -jnp.log1p(-k[:-1])
+    y2 = jax.vmap(second.dense.evaluate)(sigma)
+    s2 = dec.alpha - jnp.exp(y2[:, 0] / dec.a)
+    v2 = dec.v_star * (1.0 - k)
+    rest = jnp.stack([final[key] for key in ("t_final", "w_final", "backing_work", "hinge_work")])
+    y2 = jnp.concatenate([y2[:, 1:], rest[None, :]])
+    s2 = jnp.append(s2, final["s_final"])
+    return dict(
+        time=jnp.concatenate([t1, y2[:, 0]]),
+        vehicle_velocity=jnp.concatenate([y1[:, 0], v2]),
+        barrier_velocity=jnp.concatenate([y1[:, 1], v2]),
+        hinge=jnp.concatenate([jnp.full_like(t1, dec.s_star), s2]),
+        displacement=jnp.concatenate([y1[:, 2], y2[:, 1]]),
+        backing_work=jnp.concatenate([y1[:, 4], y2[:, 2]]),
+        hinge_work=jnp.concatenate([y1[:, 5], y2[:, 3]]),
+    )
+
+
+# --------------------------------------------------------------------------------------
+# Public function.
+
+
+def _rigid_barrier(mu, phi, speed, n_history) -> NormalImpact:
+    """phi <= 1: the barrier never yields and the vehicle crushes to rest at P0."""
+    zero = jnp.zeros_like(mu)
+    t_stop = mu * speed / phi
+    damage = 0.5 * mu * speed**2 / phi
+    history = None
+    if n_history:
+        t = t_stop * jnp.linspace(0.0, 1.0, 2 * n_history)
+        vehicle = speed - phi / mu * t
+        zeros = jnp.zeros_like(t)
+        history = NormalImpactHistory(
+            time=t,
+            vehicle_velocity=vehicle,
+            barrier_velocity=zeros,
+            hinge=zeros,
+            displacement=zeros,
+            contact_force=jnp.full_like(t, phi),
+            crush=speed * t - 0.5 * phi / mu * t**2,
+            backing_work=zeros,
+            hinge_work=zeros,
+            beam_kinetic_energy=zeros,
+            vehicle_kinetic_energy=0.5 * mu * vehicle**2,
+        )
+    return NormalImpact(
+        s_star=zero,
+        t_star=t_stop,
+        v_star=zero,
+        w_star=zero,
+        damage=damage,
+        s_final=zero,
+        t_final=t_stop,
+        w_final=zero,
+        crush_work=phi * damage,
+        backing_work=zero,
+        hinge_work=zero,
+        history=history,
+    )
+
+
+def _finish_history(raw, mu, phi, speed, acc, damage_per_speed2) -> NormalImpactHistory:
+    """Scale speed-free histories by the impact speed and add the derived quantities."""
+    time = raw["time"] * speed
+    vehicle = raw["vehicle_velocity"] * speed
+    beam = raw["barrier_velocity"] * speed
+    s = raw["hinge"]
+    n = s.shape[0] // 2
+    in_first = jnp.arange(2 * n) < n
+    force = jnp.where(in_first, phi, mu * (s**2 + 3.0) / (2.0 * s * (s + 2.0 * mu)))
+    t1 = jnp.minimum(raw["time"], acc.t_star)
+    crush = (t1 - 0.5 * (acc.deceleration + acc.acceleration) * t1**2) * speed**2
+    crush = jnp.where(in_first, crush, damage_per_speed2 * speed**2)
+    return NormalImpactHistory(
+        time=time,
+        vehicle_velocity=vehicle,
+        barrier_velocity=beam,
+        hinge=s,
+        displacement=raw["displacement"] * speed**2,
+        contact_force=force,
+        crush=crush,
+        backing_work=raw["backing_work"] * speed**2,
+        hinge_work=raw["hinge_work"] * speed**2,
+        beam_kinetic_energy=beam**2 * s / 3.0,
+        vehicle_kinetic_energy=0.5 * mu * vehicle**2,
+    )
+
+
+@functools.partial(jax.jit, static_argnames=("method", "rtol", "n_history", "solver"))
+def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
+    yields = phi > 1.0
+    safe_phi = jnp.where(yields, phi, 2.0)  # keeps the unused branch finite for gradients
+    if method == "closed_form":
+        acc, final, raw = _closed_form(mu, safe_phi, rtol=rtol, n_history=n_history)
+        damage = 0.5 * acc.t_star
+    else:
+        acc, final, raw = _ode(mu, safe_phi, rtol=rtol, n_history=n_history, solver=solver)
+        damage = final.pop("damage")
+    history = None
+    if n_history:
+        history = _finish_history(raw, mu, safe_phi, speed, acc, damage)
+    result = NormalImpact(
+        s_star=acc.s_star,
+        t_star=acc.t_star * speed,
+        v_star=acc.v_star * speed,
+        w_star=acc.w_star * speed**2,
+        damage=damage * speed**2,
+        s_final=final["s_final"],
+        t_final=final["t_final"] * speed,
+        w_final=final["w_final"] * speed**2,
+        crush_work=safe_phi * damage * speed**2,
+        backing_work=final["backing_work"] * speed**2,
+        hinge_work=final["hinge_work"] * speed**2,
+        history=history,
+    )
+    rigid = _rigid_barrier(mu, phi, speed, n_history)
+    return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+
+
+def normal_impact(
+    mass_ratio,
+    force_ratio,
+    speed,
+    *,
+    method: Literal["closed_form", "ode"] = "closed_form",
+    rtol: float = 1e-8,
+    n_history: int = 0,
+    solver: diffrax.AbstractSolver | None = None,
+) -> NormalImpact:
+    """Normal impact of a rigid-plastic vehicle on a rigid-plastic beam on a rigid-plastic
+    backing (report 3.2), in the report's dimensionless variables.
+
+    **Arguments:**
+
+    - `mass_ratio`: mu = M / (m L) (3.2, after 3.2.8), positive.
+    - `force_ratio`: phi = P0 / P_b, positive; phi <= 1 is the report's trivial case
+      (rigid barrier, the vehicle alone crushes) and is returned, not refused.
+    - `speed`: V0, the vehicle's dimensionless impact speed, positive.
+    - `method`: `"closed_form"` ((3.2.11)-(3.2.20), quadrature in S with the end
+      singularity at S = alpha integrated exactly) or `"ode"` (diffrax, one solve per
+      phase, switching on real-valued events).
+    - `rtol`: relative tolerance: of the ODE solver, or the target of the quadrature.
+    - `n_history`: number of saved samples per phase (0: none, the cheapest).
+    - `solver`: diffrax solver for `method="ode"` (default `diffrax.Tsit5()`).
+
+    Scalars or arrays of one shape; use `jax.vmap` for batches and `jax.grad` for
+    gradients with respect to any argument.
+    """
+    if method not in ("closed_form", "ode"):
+        raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
+    if not 0.0 < rtol < 1.0:
+        raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
+    if int(n_history) != n_history or n_history < 0 or n_history == 1:
+        raise ValueError(f"n_history must be 0 or an integer >= 2; got {n_history!r}")
+    mu = _checks.positive("mass_ratio", mass_ratio)
+    phi = _checks.positive("force_ratio", force_ratio)
+    speed = _checks.positive("speed", speed)
+    mu, phi, speed = jnp.broadcast_arrays(mu, phi, speed)
+    solve = functools.partial(
+        _normal_impact,
+        method=method,
+        rtol=float(rtol),
+        n_history=int(n_history),
+        solver=solver if solver is not None else diffrax.Tsit5(),
+    )
+    if mu.ndim == 0:
+        return solve(mu, phi, speed)
+    flat = jax.vmap(solve)(mu.ravel(), phi.ravel(), speed.ravel())
+    return jax.tree.map(lambda leaf: leaf.reshape(mu.shape + leaf.shape[1:]), flat)
