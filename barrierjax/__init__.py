@@ -1,5 +1,24 @@
-"""barrierjax: differentiable impact-dynamics models for highway barriers, in JAX."""
+"""barrierjax: differentiable impact-dynamics models for highway barriers, in JAX.
+
+Describe a `Scene` (a `Barrier`, a `Vehicle`, an `Impact`) in any consistent units and
+call `simulate(scene)`; the report's models live in `barrierjax.hinge`, the sizing
+problem in `barrierjax.design`.
+"""
 
 from . import hinge
+from .scene import Barrier, Dimensionless, Impact, Scales, Scene, Vehicle, dimensionless
+from .simulate import History, Result, simulate
 
-__all__ = ["hinge"]
+__all__ = [
+    "Barrier",
+    "Dimensionless",
+    "History",
+    "Impact",
+    "Result",
+    "Scales",
+    "Scene",
+    "Vehicle",
+    "dimensionless",
+    "hinge",
+    "simulate",
+]
