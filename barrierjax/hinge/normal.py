@@ -299,10 +299,24 @@ def _closed_form(mu, phi, *, rtol, n_history):
     return acc, final, history
 
 
+def _s_resolving(dec, count):
+    """Hinge positions uniform in [S*, alpha): they resolve the growth of the deformed
+    zone, which heavy vehicles complete in a small fraction of the duration."""
+    return dec.s_star + (dec.alpha - dec.s_star) * jnp.linspace(0.0, 1.0, count, endpoint=False)
+
+
+def _v_resolving(dec, fractions):
+    """Hinge positions at u^A = 1 - fraction (about uniform in V near rest), ending at alpha."""
+    u_a = 1.0 - fractions
+    shrink = jnp.where(u_a > 0, u_a, 1.0) ** (1.0 / dec.a)
+    return jnp.where(u_a > 0, dec.alpha - (dec.alpha - dec.s_star) * shrink, dec.alpha)
+
+
 def _closed_form_history(acc, dec, n, s_mid, final, n_history):
-    """Accelerative phase on a uniform grid in T; decelerative phase on a grid uniform in
-    u^A (about uniform in V near rest), each point by the better-conditioned of
-    "head from S*" or "total minus tail to alpha"."""
+    """Accelerative phase on a uniform grid in T; decelerative phase on hinge positions
+    that resolve both the growth of S and the approach to rest (`_s_resolving`,
+    `_v_resolving`), each point by the better-conditioned of "head from S*" or "total
+    minus tail to alpha"."""
     k = jnp.linspace(0.0, 1.0, n_history)
     t1 = acc.t_star * k
     v1 = acc.acceleration * t1
@@ -316,9 +330,11 @@ def _closed_form_history(acc, dec, n, s_mid, final, n_history):
         backing_work=0.5 * w1 * acc.s_star,
         hinge_work=0.5 * w1 / acc.s_star,
     )
-    u_a = 1.0 - k  # (alpha - S)^A / (alpha - S*)^A
-    s = dec.alpha - (dec.alpha - dec.s_star) * jnp.where(u_a > 0, u_a, 1.0) ** (1.0 / dec.a)
-    s = jnp.where(u_a > 0, s, dec.alpha)
+    half = n_history // 2
+    s = jnp.sort(jnp.concatenate([_s_resolving(dec, half), _v_resolving(dec, k[half:])]))
+    below = s < dec.alpha
+    ratio = jnp.where(below, (dec.alpha - s) / (dec.alpha - dec.s_star), 1.0)
+    u_a = jnp.where(below, ratio**dec.a, 0.0)  # (alpha - S)^A / (alpha - S*)^A
     head = _head_integrals(dec, jnp.minimum(s, s_mid), n)
     totals = jnp.stack(
         [final["t_final"] - acc.t_star, final["w_final"] - acc.w_star]
@@ -446,14 +462,18 @@ def _ode(mu, phi, *, rtol, n_history, solver):
 
 
 def _ode_history(first, second, dec, final, n_history):
-    """Accelerative phase uniform in T; decelerative phase uniform in V, ending at rest."""
+    """Accelerative phase uniform in T; decelerative phase in sigma, ending at rest."""
     k = jnp.linspace(0.0, 1.0, n_history)
     t1 = first.t_end * k
     y1 = jax.vmap(first.dense.evaluate)(t1)
-    sigma = -jnp.log1p(-k[:-1])
+    # Half the samples uniform in V; half in sigma/A, the scale on which S grows.
+    half = n_history // 2
+    sigma = jnp.sort(
+        jnp.concatenate([-jnp.log1p(-k[half:-1]), 10.0 * dec.a * jnp.linspace(0.0, 1.0, half, endpoint=False)])
+    )
     y2 = jax.vmap(second.dense.evaluate)(sigma)
     s2 = dec.alpha - jnp.exp(y2[:, 0] / dec.a)
-    v2 = dec.v_star * (1.0 - k)
+    v2 = jnp.append(dec.v_star * jnp.exp(-sigma), 0.0)
     rest = jnp.stack([final[key] for key in ("t_final", "w_final", "backing_work", "hinge_work")])
     y2 = jnp.concatenate([y2[:, 1:], rest[None, :]])
     s2 = jnp.append(s2, final["s_final"])
