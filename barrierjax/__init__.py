@@ -6,7 +6,16 @@ problem in `barrierjax.design`.
 """
 
 from . import hinge
-from .scene import Barrier, Dimensionless, Impact, Scales, Scene, Vehicle, dimensionless
+from .scene import (
+    Barrier,
+    Dimensionless,
+    Impact,
+    Scales,
+    Scene,
+    Vehicle,
+    broadcast_scene,
+    dimensionless,
+)
 from .simulate import History, Result, simulate
 
 __all__ = [
@@ -18,6 +27,7 @@ __all__ = [
     "Scales",
     "Scene",
     "Vehicle",
+    "broadcast_scene",
     "dimensionless",
     "hinge",
     "simulate",

@@ -18,6 +18,7 @@ time with the same message (`equinox.error_if`).
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
@@ -147,3 +148,10 @@ def dimensionless(scene: Scene) -> Dimensionless:
         friction=impact.friction,
         scales=s,
     )
+
+
+def broadcast_scene(scene: Scene) -> Scene:
+    """`scene` with every leaf broadcast to the leaves' common shape, so that a plain
+    `jax.vmap` maps over all of them (a sweep over speed alone, say)."""
+    leaves, treedef = jax.tree.flatten(scene)
+    return jax.tree.unflatten(treedef, jnp.broadcast_arrays(*leaves))

@@ -1,0 +1,106 @@
+"""simulate(scene): physical units, invariance of units, energy, batches, gradients, dispatch."""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import barrierjax as bj
+
+INCH, LBF = 0.0254, 4.4482216152605  # m, N
+POUND_MASS = LBF / INCH  # kg in one lbf s^2/in (175.127 kg)
+
+
+def si_scene(speed=40 / 3.6):
+    return bj.Scene(
+        bj.Barrier(plastic_moment=105e3, mass_per_length=34.0, backing_strength=60e3),
+        bj.Vehicle(mass=2270.0, crush_force=450e3),
+        bj.Impact(speed=speed),
+    )
+
+
+def inch_pound_scene():
+    """The same scene in the report's units: inch, lbf, second (mass in lbf s^2/in)."""
+    return bj.Scene(
+        bj.Barrier(
+            plastic_moment=105e3 / (LBF * INCH),
+            mass_per_length=34.0 / (POUND_MASS / INCH),
+            backing_strength=60e3 / (LBF / INCH),
+        ),
+        bj.Vehicle(mass=2270.0 / POUND_MASS, crush_force=450e3 / LBF),
+        bj.Impact(speed=40 / 3.6 / INCH),
+    )
+
+
+@pytest.mark.parametrize("method", ["closed_form", "ode"])
+def test_results_do_not_depend_on_units(method):
+    si = bj.simulate(si_scene(), method=method, n_history=0)
+    ips = bj.simulate(inch_pound_scene(), method=method, n_history=0)
+    assert float(ips.damage) * INCH == pytest.approx(float(si.damage), rel=1e-12)
+    assert float(ips.max_deflection) * INCH == pytest.approx(float(si.max_deflection), rel=1e-12)
+    assert float(ips.duration) == pytest.approx(float(si.duration), rel=1e-12)
+    assert float(ips.peak_force) * LBF == pytest.approx(float(si.peak_force), rel=1e-12)
+    assert float(ips.hinge_extent) * INCH == pytest.approx(float(si.hinge_extent), rel=1e-12)
+    assert float(ips.backing_work) * LBF * INCH == pytest.approx(float(si.backing_work), rel=1e-12)
+
+
+def test_energy_balance_in_physical_units():
+    r = bj.simulate(si_scene(), n_history=0)
+    spent = r.crush_work + r.backing_work + r.hinge_work
+    assert float(spent) == pytest.approx(float(r.kinetic_energy), rel=1e-10)
+
+
+def test_histories_and_deflected_shape():
+    r = bj.simulate(si_scene(), n_history=100, n_shape=101)
+    h = r.history
+    assert h.deflected_shape.shape == (200, 101)
+    # Under the impact point the shape is the displacement history.
+    np.testing.assert_allclose(h.deflected_shape[:, 0], h.displacement, rtol=1e-12, atol=1e-15)
+    # Nothing moves beyond the hinge; the final hinge is the hinge extent.
+    beyond = np.asarray(h.x)[None, :] > np.asarray(h.hinge_position)[:, None] * (1 + 1e-9)
+    assert np.all(np.asarray(h.deflected_shape)[beyond] == 0.0)
+    assert float(h.hinge_position[-1]) == pytest.approx(float(r.hinge_extent), rel=1e-12)
+    # The shape never rises with distance from the impact point, and displacement never
+    # decreases in time (a rigid-plastic backing does not spring back).
+    assert np.all(np.diff(np.asarray(h.deflected_shape), axis=1) <= 1e-12)
+    assert np.all(np.diff(np.asarray(h.deflected_shape), axis=0) >= -1e-9)
+    assert float(h.displacement[-1]) == pytest.approx(float(r.max_deflection), rel=1e-12)
+    assert float(h.time[-1]) == pytest.approx(float(r.duration), rel=1e-12)
+
+
+def test_vmap_over_scene_leaves_equals_loop():
+    speeds = jnp.array([3.0, 8.0, 15.0, 25.0])
+    batch = jax.vmap(lambda s: bj.simulate(s, n_history=0))(bj.broadcast_scene(si_scene(speed=speeds)))
+    for i, v in enumerate(speeds):
+        single = bj.simulate(si_scene(speed=float(v)), n_history=0)
+        assert float(batch.max_deflection[i]) == pytest.approx(float(single.max_deflection), rel=1e-13)
+        assert float(batch.damage[i]) == pytest.approx(float(single.damage), rel=1e-13)
+
+
+@pytest.mark.parametrize("method", ["closed_form", "ode"])
+def test_gradient_with_respect_to_every_scene_leaf(method):
+    base = si_scene()
+    leaves, treedef = jax.tree.flatten(base)
+    x = jnp.stack(leaves)
+
+    def outputs(x):
+        r = bj.simulate(jax.tree.unflatten(treedef, list(x)), method=method, rtol=1e-11, n_history=0)
+        return jnp.stack([r.damage, r.max_deflection, r.duration])
+
+    jacobian = jax.jacrev(outputs)(x)
+    # M0, m, q0, M, P0, speed (the angle and friction belong to the oblique model)
+    for i in range(6):
+        h = 1e-6 * x[i]
+        fd = (outputs(x.at[i].add(h)) - outputs(x.at[i].add(-h))) / (2 * h)
+        scale = jnp.maximum(jnp.abs(fd), 1e-6 * jnp.max(jnp.abs(jacobian), axis=1))
+        assert float(jnp.max(jnp.abs(jacobian[:, i] - fd) / scale)) < 1e-5, i
+
+
+def test_unimplemented_physics_is_refused_not_ignored():
+    oblique = eqx.tree_at(lambda s: s.impact, si_scene(), bj.Impact(10.0, angle_deg=25.0))
+    with pytest.raises(NotImplementedError, match="angle_deg"):
+        bj.simulate(oblique)
+    axial = eqx.tree_at(lambda s: s.barrier, si_scene(), bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6))
+    with pytest.raises(NotImplementedError, match="axial_capacity"):
+        bj.simulate(axial)
