@@ -228,11 +228,20 @@ def _decelerative_constants(mu, acc: _Accelerative) -> _Decelerative:
     )
 
 
-def _integrands(s, f, v_tilde):
-    """Integrands of (tau, w, backing work, hinge work) in S, without the weight u^(A-1)
-    (index 0) or u^(2A-1) (indices 1-3) that the caller supplies."""
+def _integrate(s, f, v_tilde, first, second):
+    """Sum the integrands of (tau, w, backing work, hinge work) in S over the last axis:
+    tau's against the weights `first` (which carry u^(A-1)), the others against `second`
+    (which carry u^(2A-1))."""
     dv = f * v_tilde
-    return jnp.stack([f, dv, 0.5 * dv * s, 0.5 * dv / s], axis=-1)
+    return jnp.stack(
+        [
+            jnp.sum(f * first, -1),
+            jnp.sum(dv * second, -1),
+            jnp.sum(0.5 * dv * s * second, -1),
+            jnp.sum(0.5 * dv / s * second, -1),
+        ],
+        axis=-1,
+    )
 
 
 def _head_integrals(dec: _Decelerative, s_end, n: int):
@@ -243,9 +252,8 @@ def _head_integrals(dec: _Decelerative, s_end, n: int):
     f, v_tilde = dec.rates(s)
     u = (dec.alpha - s) / (dec.alpha - dec.s_star)
     ua = u**dec.a
-    weight = jnp.stack([ua / u, ua * ua / u, ua * ua / u, ua * ua / u], axis=-1)
-    integrand = _integrands(s, f, v_tilde) * weight / (dec.alpha - dec.s_star)
-    return jnp.sum(integrand * ((s + dec.beta) * weights)[..., None], axis=-2)
+    first = (s + dec.beta) * weights * ua / (u * (dec.alpha - dec.s_star))
+    return _integrate(s, f, v_tilde, first, first * ua)
 
 
 def _tail_integrals(dec: _Decelerative, s_start, n: int):
@@ -255,14 +263,9 @@ def _tail_integrals(dec: _Decelerative, s_start, n: int):
     s = dec.alpha - h[..., None] * jacobi_product_nodes(n)
     f, v_tilde = dec.rates(s)
     rho_a = jnp.exp(dec.a * jnp.log(h / (dec.alpha - dec.s_star)))[..., None]
-    weights_1 = jacobi_product_weights(n, dec.a - 1.0) * rho_a
-    weights_2 = jacobi_product_weights(n, 2.0 * dec.a - 1.0) * rho_a**2
-    integrand = _integrands(s, f, v_tilde)
-    return jnp.stack(
-        [jnp.sum(integrand[..., 0] * weights_1, -1)]
-        + [jnp.sum(integrand[..., k] * weights_2, -1) for k in (1, 2, 3)],
-        axis=-1,
-    )
+    first = jacobi_product_weights(n, dec.a - 1.0) * rho_a
+    second = jacobi_product_weights(n, 2.0 * dec.a - 1.0) * rho_a**2
+    return _integrate(s, f, v_tilde, first, second)
 
 
 def _split_point(dec: _Decelerative):
