@@ -66,18 +66,22 @@ class Result(eqx.Module):
     history: History | None
 
 
-def _require_normal_impact(scene: Scene) -> None:
+def _require_normal_impact(scene: Scene) -> Scene:
     if scene.barrier.axial_capacity is not None:
         raise NotImplementedError(
             "Barrier.axial_capacity is set, but the axial-force model (report 3.4) is not "
             "implemented yet; leave axial_capacity=None"
         )
+    message = (
+        "Impact.angle_deg < 90: the oblique-impact model (report 3.3) is not "
+        "implemented yet; use angle_deg=90"
+    )
     angle = scene.impact.angle_deg
-    if not isinstance(angle, Tracer) and not np.all(np.asarray(angle) == 90.0):
-        raise NotImplementedError(
-            "Impact.angle_deg < 90: the oblique-impact model (report 3.3) is not "
-            "implemented yet; use angle_deg=90"
-        )
+    if isinstance(angle, Tracer):
+        return eqx.tree_at(lambda s: s.impact.angle_deg, scene, eqx.error_if(angle, angle != 90.0, message))
+    if not np.all(np.asarray(angle) == 90.0):
+        raise NotImplementedError(message)
+    return scene
 
 
 def deflected_shape(x, hinge, displacement, hinge_work):
@@ -107,9 +111,11 @@ def simulate(
     """The response of `scene` in its own units; `n_history=0` skips the histories.
 
     Normal impact (angle 90 degrees, no axial capacity): report 3.2 by
-    `barrierjax.hinge.normal_impact` with `method` and `rtol`.
+    `barrierjax.hinge.normal_impact` with `method` and `rtol`. Friction plays no part in
+    a normal impact (nothing slides). Other scenes raise `NotImplementedError` until
+    their models land (inside `jit`, an oblique angle fails at run time).
     """
-    _require_normal_impact(scene)
+    scene = _require_normal_impact(scene)
     groups = dimensionless(scene)
     s = groups.scales
     model = normal_impact(

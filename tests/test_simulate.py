@@ -104,3 +104,12 @@ def test_unimplemented_physics_is_refused_not_ignored():
     axial = eqx.tree_at(lambda s: s.barrier, si_scene(), bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6))
     with pytest.raises(NotImplementedError, match="axial_capacity"):
         bj.simulate(axial)
+
+
+def test_traced_oblique_angle_fails_at_run_time():
+    run = jax.jit(lambda angle: bj.simulate(
+        bj.Scene(si_scene().barrier, si_scene().vehicle, bj.Impact(10.0, angle_deg=angle)), n_history=0
+    ).damage)
+    assert np.isfinite(float(run(90.0)))
+    with pytest.raises(Exception, match="angle_deg"):
+        float(run(30.0))

@@ -256,20 +256,21 @@ def _head_integrals(dec: _Decelerative, s_end, n: int):
     return _integrate(s, f, v_tilde, first, first * ua)
 
 
-def _tail_integrals(dec: _Decelerative, s_start, n: int):
-    """(tau, w, backing, hinge) integrated over [s_start, alpha] by product integration
-    with the exact weights r^(A-1) and r^(2A-1), r = (alpha - S)/(alpha - s_start)."""
-    h = dec.alpha - s_start
+def _tail_integrals(dec: _Decelerative, log_gap, n: int):
+    """(tau, w, backing, hinge) integrated from S to alpha by product integration with the
+    exact weights r^(A-1) and r^(2A-1), r = (alpha - S')/(alpha - S). The start S is given
+    by log_gap = ln((alpha - S)/(alpha - S*)), which stays exact where alpha - S is below
+    the rounding of alpha (heavy vehicles near rest)."""
+    h = (dec.alpha - dec.s_star) * jnp.exp(log_gap)
     s = dec.alpha - h[..., None] * jacobi_product_nodes(n)
     f, v_tilde = dec.rates(s)
-    rho_a = jnp.exp(dec.a * jnp.log(h / (dec.alpha - dec.s_star)))[..., None]
+    rho_a = jnp.exp(dec.a * log_gap)[..., None]
     first = jacobi_product_weights(n, dec.a - 1.0) * rho_a
     second = jacobi_product_weights(n, 2.0 * dec.a - 1.0) * rho_a**2
     return _integrate(s, f, v_tilde, first, second)
 
 
-def _split_point(dec: _Decelerative):
-    return dec.s_star + 0.25 * (dec.alpha - dec.s_star)
+_SPLIT = 0.75  # the head covers [S*, S_m], S_m = alpha - 0.75 (alpha - S*); the tail the rest
 
 
 def _quadrature_points(rtol: float) -> int:
@@ -286,8 +287,9 @@ def _closed_form(mu, phi, *, rtol, n_history):
     acc = _accelerative_phase(mu, phi)
     dec = _decelerative_constants(mu, acc)
     n = _quadrature_points(rtol)
-    s_mid = _split_point(dec)
-    tau, w, backing, hinge = _head_integrals(dec, s_mid, n) + _tail_integrals(dec, s_mid, n)
+    s_mid = dec.alpha - _SPLIT * (dec.alpha - dec.s_star)
+    log_split = jnp.log(jnp.asarray(_SPLIT, s_mid.dtype))
+    tau, w, backing, hinge = _head_integrals(dec, s_mid, n) + _tail_integrals(dec, log_split, n)
     t_star, w_star, s_star = acc.t_star, acc.w_star, acc.s_star
     final = dict(
         s_final=dec.alpha,
@@ -298,30 +300,26 @@ def _closed_form(mu, phi, *, rtol, n_history):
     )
     history = None
     if n_history:
-        history = _closed_form_history(acc, dec, n, s_mid, final, n_history)
+        history = _closed_form_history(acc, dec, n, final, n_history)
     return acc, final, history
 
 
-def _s_resolving(dec, count):
-    """Hinge positions uniform in [S*, alpha): they resolve the growth of the deformed
-    zone, which heavy vehicles complete in a small fraction of the duration."""
-    return dec.s_star + (dec.alpha - dec.s_star) * jnp.linspace(0.0, 1.0, count, endpoint=False)
+def _history_gaps(dec, n_history):
+    """ln((alpha - S)/(alpha - S*)) at the decelerative samples before rest, in time order:
+    half uniform in S (the growth of the deformed zone, which heavy vehicles complete in a
+    small fraction of the duration), half uniform in u^A = ((alpha-S)/(alpha-S*))^A, which
+    is about uniform in V near rest."""
+    half = n_history // 2
+    in_s = jnp.log1p(-jnp.linspace(0.0, 1.0, half, endpoint=False))
+    in_v = jnp.log1p(-jnp.linspace(0.0, 1.0, n_history - half, endpoint=False)[1:]) / dec.a
+    return -jnp.sort(-jnp.concatenate([in_s, in_v]))
 
 
-def _v_resolving(dec, fractions):
-    """Hinge positions at u^A = 1 - fraction (about uniform in V near rest), ending at alpha."""
-    u_a = 1.0 - fractions
-    shrink = jnp.where(u_a > 0, u_a, 1.0) ** (1.0 / dec.a)
-    return jnp.where(u_a > 0, dec.alpha - (dec.alpha - dec.s_star) * shrink, dec.alpha)
-
-
-def _closed_form_history(acc, dec, n, s_mid, final, n_history):
-    """Accelerative phase on a uniform grid in T; decelerative phase on hinge positions
-    that resolve both the growth of S and the approach to rest (`_s_resolving`,
-    `_v_resolving`), each point by the better-conditioned of "head from S*" or "total
-    minus tail to alpha"."""
-    k = jnp.linspace(0.0, 1.0, n_history)
-    t1 = acc.t_star * k
+def _closed_form_history(acc, dec, n, final, n_history):
+    """Accelerative phase on a uniform grid in T; decelerative phase at `_history_gaps`
+    and at rest, each point by the better-conditioned of "head from S*" or "total minus
+    tail to alpha"."""
+    t1 = acc.t_star * jnp.linspace(0.0, 1.0, n_history)
     v1 = acc.acceleration * t1
     w1 = 0.5 * acc.acceleration * t1**2
     first = dict(
@@ -333,19 +331,17 @@ def _closed_form_history(acc, dec, n, s_mid, final, n_history):
         backing_work=0.5 * w1 * acc.s_star,
         hinge_work=0.5 * w1 / acc.s_star,
     )
-    half = n_history // 2
-    s = jnp.sort(jnp.concatenate([_s_resolving(dec, half), _v_resolving(dec, k[half:])]))
-    below = s < dec.alpha
-    ratio = jnp.where(below, (dec.alpha - s) / (dec.alpha - dec.s_star), 1.0)
-    u_a = jnp.where(below, ratio**dec.a, 0.0)  # (alpha - S)^A / (alpha - S*)^A
-    head = _head_integrals(dec, jnp.minimum(s, s_mid), n)
+    log_gap = _history_gaps(dec, n_history)
+    log_split = jnp.log(jnp.asarray(_SPLIT, log_gap.dtype))
+    s = dec.alpha - (dec.alpha - dec.s_star) * jnp.exp(log_gap)
+    head = _head_integrals(dec, jnp.minimum(s, dec.alpha - _SPLIT * (dec.alpha - dec.s_star)), n)
     totals = jnp.stack(
         [final["t_final"] - acc.t_star, final["w_final"] - acc.w_star]
         + [final[key] - first[key][-1] for key in ("backing_work", "hinge_work")]
     )
-    tail = totals - _tail_integrals(dec, jnp.maximum(s, s_mid), n)
-    cumulative = jnp.where((s <= s_mid)[:, None], head, tail)
-    v2 = dec.v_star * u_a * jnp.exp(dec.log_ratio(s))
+    tail = totals - _tail_integrals(dec, jnp.minimum(log_gap, log_split), n)
+    cumulative = jnp.where((log_gap >= log_split)[:, None], head, tail)
+    v2 = dec.v_star * jnp.exp(dec.a * log_gap + dec.log_ratio(s))
     second = dict(
         time=acc.t_star + cumulative[:, 0],
         vehicle_velocity=v2,
@@ -355,7 +351,16 @@ def _closed_form_history(acc, dec, n, s_mid, final, n_history):
         backing_work=first["backing_work"][-1] + cumulative[:, 2],
         hinge_work=first["hinge_work"][-1] + cumulative[:, 3],
     )
-    return {key: jnp.concatenate([first[key], second[key]]) for key in first}
+    at_rest = dict(
+        time=final["t_final"],
+        vehicle_velocity=jnp.zeros_like(v2[0]),
+        barrier_velocity=jnp.zeros_like(v2[0]),
+        hinge=final["s_final"],
+        displacement=final["w_final"],
+        backing_work=final["backing_work"],
+        hinge_work=final["hinge_work"],
+    )
+    return {key: jnp.concatenate([first[key], second[key], at_rest[key][None]]) for key in first}
 
 
 # --------------------------------------------------------------------------------------
@@ -460,20 +465,20 @@ def _ode(mu, phi, *, rtol, n_history, solver):
     )
     history = None
     if n_history:
-        history = _ode_history(first, second, dec, final, n_history)
+        history = _ode_history(first, second, dec, final, n_history, sigma_end)
     return acc, final, history
 
 
-def _ode_history(first, second, dec, final, n_history):
+def _ode_history(first, second, dec, final, n_history, sigma_end):
     """Accelerative phase uniform in T; decelerative phase in sigma, ending at rest."""
     k = jnp.linspace(0.0, 1.0, n_history)
     t1 = first.t_end * k
     y1 = jax.vmap(first.dense.evaluate)(t1)
     # Half the samples uniform in V; half in sigma/A, the scale on which S grows.
     half = n_history // 2
-    sigma = jnp.sort(
-        jnp.concatenate([-jnp.log1p(-k[half:-1]), 10.0 * dec.a * jnp.linspace(0.0, 1.0, half, endpoint=False)])
-    )
+    in_v = -jnp.log1p(-jnp.linspace(0.0, 1.0, n_history - half, endpoint=False)[1:])
+    in_s = 10.0 * dec.a * jnp.linspace(0.0, 1.0, half, endpoint=False)
+    sigma = jnp.minimum(jnp.sort(jnp.concatenate([in_s, in_v])), sigma_end)
     y2 = jax.vmap(second.dense.evaluate)(sigma)
     s2 = dec.alpha - jnp.exp(y2[:, 0] / dec.a)
     v2 = jnp.append(dec.v_star * jnp.exp(-sigma), 0.0)
