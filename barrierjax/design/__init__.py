@@ -1,0 +1,54 @@
+"""Barrier design: size a tube rail and its backing for least vehicle damage under a
+deflection limit, by gradients (augmented Lagrangian with optax), checked by brute force.
+
+`optimize_default()` solves the default problem and returns a `DesignReport`
+(`summary()`, `as_dict()`); `SizingProblem` states a problem, `SteelTube` the section.
+"""
+
+from .section import SteelTube, area, plastic_modulus
+from .sizing import (
+    DesignReport,
+    GridResult,
+    ImpactCases,
+    SizingProblem,
+    Solution,
+    barrier,
+    constraint,
+    default_cases,
+    default_starts,
+    grid_search,
+    objective,
+    optimize,
+    optimize_default,
+    polish,
+    responses,
+    rigid_wall_crush,
+    solve,
+    to_design,
+    to_unit,
+)
+
+__all__ = [
+    "DesignReport",
+    "GridResult",
+    "ImpactCases",
+    "SizingProblem",
+    "Solution",
+    "SteelTube",
+    "area",
+    "barrier",
+    "constraint",
+    "default_cases",
+    "default_starts",
+    "grid_search",
+    "objective",
+    "optimize",
+    "optimize_default",
+    "plastic_modulus",
+    "polish",
+    "responses",
+    "rigid_wall_crush",
+    "solve",
+    "to_design",
+    "to_unit",
+]
