@@ -45,11 +45,11 @@ def _legendre_projection(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _shifted_legendre_moments(lam, n: int):
     """m_k = integral of r**lam P_k(2r - 1) over [0, 1], k = 0 .. n-1."""
-    lam = jnp.asarray(lam)[..., None]
-    k = jnp.arange(1, n, dtype=lam.dtype)
-    ratios = (lam - k + 1.0) / (lam + k + 1.0)
-    first = 1.0 / (lam + 1.0)
-    return first * jnp.concatenate([jnp.ones_like(lam), jnp.cumprod(ratios, axis=-1)], axis=-1)
+    lam = jnp.asarray(lam)
+    moments = [1.0 / (lam + 1.0)]
+    for k in range(1, n):  # unrolled: n is small and static, and XLA fuses the products
+        moments.append(moments[-1] * (lam - k + 1.0) / (lam + k + 1.0))
+    return jnp.stack(moments, axis=-1)
 
 
 def jacobi_product_nodes(n: int) -> np.ndarray:

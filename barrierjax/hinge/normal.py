@@ -196,17 +196,17 @@ class _Decelerative(eqx.Module):
     s_star: Scalar
     v_star: Scalar
 
-    def log_ratio(self, s):
-        """B ln((S+beta)/(S*+beta)) + C ln((S+gamma)/(S*+gamma))."""
-        return self.b * jnp.log1p((s - self.s_star) / (self.s_star + self.beta)) + self.c * jnp.log1p(
-            (s - self.s_star) / (self.s_star + self.gamma)
-        )
+    def log_ratio(self, s, log_beta_ratio=None):
+        """B ln((S+beta)/(S*+beta)) + C ln((S+gamma)/(S*+gamma)); the first logarithm may
+        be passed in where the caller already has it."""
+        if log_beta_ratio is None:
+            log_beta_ratio = jnp.log1p((s - self.s_star) / (self.s_star + self.beta))
+        return self.b * log_beta_ratio + self.c * jnp.log1p((s - self.s_star) / (self.s_star + self.gamma))
 
-    def rates(self, s):
-        """(F, v~) with dtau/dS = F u^(A-1)/(alpha - S*) and v = v~ u^A, u = (alpha-S)/(alpha-S*)."""
-        v_tilde = self.v_star * jnp.exp(self.log_ratio(s))
-        f = 2.0 * s * (s + 2.0 * self.mu) / ((s + self.beta) * (s + self.gamma)) * v_tilde
-        return f, v_tilde
+    def lever(self, s):
+        """2 S (S + 2 mu) / ((S + beta)(S + gamma)), so that dT/dS = lever V / (alpha - S)
+        (3.2.16, with p(S) factored as in 3.2.17)."""
+        return 2.0 * s * (s + 2.0 * self.mu) / ((s + self.beta) * (s + self.gamma))
 
 
 def _decelerative_constants(mu, acc: _Accelerative) -> _Decelerative:
@@ -228,17 +228,15 @@ def _decelerative_constants(mu, acc: _Accelerative) -> _Decelerative:
     )
 
 
-def _integrate(s, f, v_tilde, first, second):
-    """Sum the integrands of (tau, w, backing work, hinge work) in S over the last axis:
-    tau's against the weights `first` (which carry u^(A-1)), the others against `second`
-    (which carry u^(2A-1))."""
-    dv = f * v_tilde
+def _integrate(s, dtau, dw):
+    """(tau, w, backing work, hinge work) from the weighted integrands of tau and w at the
+    nodes s (last axis): dW = V dT, and the works are (1/2) S dW and (1/2) dW / S."""
     return jnp.stack(
         [
-            jnp.sum(f * first, -1),
-            jnp.sum(dv * second, -1),
-            jnp.sum(0.5 * dv * s * second, -1),
-            jnp.sum(0.5 * dv / s * second, -1),
+            jnp.sum(dtau, -1),
+            jnp.sum(dw, -1),
+            0.5 * jnp.sum(dw * s, -1),
+            0.5 * jnp.sum(dw / s, -1),
         ],
         axis=-1,
     )
@@ -246,14 +244,17 @@ def _integrate(s, f, v_tilde, first, second):
 
 def _head_integrals(dec: _Decelerative, s_end, n: int):
     """(tau, w, backing, hinge) integrated over [S*, s_end], s_end < alpha, by Gauss in
-    z = ln(S + beta), where dS = (S + beta) dz."""
-    z, weights = gauss_legendre(n, jnp.log(dec.s_star + dec.beta), jnp.log(s_end + dec.beta))
+    z = ln(S + beta), where dS = (S + beta) dz and ln((S+beta)/(S*+beta)) = z - z(S*).
+
+    dtau/dS = 2 S (S + 2 mu) V / ((alpha - S)(S + beta)(S + gamma))   (3.2.20), with V from
+    (3.2.19) as V* exp(A ln u + B ln(..) + C ln(..)), u = (alpha - S)/(alpha - S*)."""
+    z_start = jnp.log(dec.s_star + dec.beta)
+    z, weights = gauss_legendre(n, z_start, jnp.log(s_end + dec.beta))
     s = jnp.exp(z) - dec.beta
-    f, v_tilde = dec.rates(s)
-    u = (dec.alpha - s) / (dec.alpha - dec.s_star)
-    ua = u**dec.a
-    first = (s + dec.beta) * weights * ua / (u * (dec.alpha - dec.s_star))
-    return _integrate(s, f, v_tilde, first, first * ua)
+    log_u = jnp.log((dec.alpha - s) / (dec.alpha - dec.s_star))
+    velocity = dec.v_star * jnp.exp(dec.a * log_u + dec.log_ratio(s, z - z_start[..., None]))
+    dtau = weights * (s + dec.beta) * dec.lever(s) * velocity / (dec.alpha - s)
+    return _integrate(s, dtau, dtau * velocity)
 
 
 def _tail_integrals(dec: _Decelerative, log_gap, n: int):
@@ -263,20 +264,22 @@ def _tail_integrals(dec: _Decelerative, log_gap, n: int):
     the rounding of alpha (heavy vehicles near rest)."""
     h = (dec.alpha - dec.s_star) * jnp.exp(log_gap)
     s = dec.alpha - h[..., None] * jacobi_product_nodes(n)
-    f, v_tilde = dec.rates(s)
-    rho_a = jnp.exp(dec.a * log_gap)[..., None]
-    first = jacobi_product_weights(n, dec.a - 1.0) * rho_a
-    second = jacobi_product_weights(n, 2.0 * dec.a - 1.0) * rho_a**2
-    return _integrate(s, f, v_tilde, first, second)
+    # V = V* rho^A r^A exp(log_ratio), rho = h / (alpha - S*): smooth part times r^A.
+    smooth_velocity = dec.v_star * jnp.exp(dec.a * log_gap[..., None] + dec.log_ratio(s))
+    dtau = jacobi_product_weights(n, dec.a - 1.0) * dec.lever(s) * smooth_velocity
+    dw = jacobi_product_weights(n, 2.0 * dec.a - 1.0) * dec.lever(s) * smooth_velocity**2
+    return _integrate(s, dtau, dw)
 
 
 _SPLIT = 0.75  # the head covers [S*, S_m], S_m = alpha - 0.75 (alpha - S*); the tail the rest
 
 
 def _quadrature_points(rtol: float) -> int:
-    """Nodes per segment: the rule converges geometrically (ratio >= ~2.7 over the
-    property-test range), so digits grow linearly with nodes."""
-    return int(min(48, max(8, round(-2.5 * math.log10(rtol)))))
+    """Nodes per segment. The rules converge geometrically; against a 30-digit reference
+    over the property-test range (benchmarks/normal_impact.py) the largest relative error
+    is 7e-9 with 10 nodes, 3e-10 with 12 and 5e-12 with 15, so 1.5 nodes per digit keeps
+    a margin of more than ten."""
+    return int(min(48, max(8, math.ceil(-1.5 * math.log10(rtol)))))
 
 
 # --------------------------------------------------------------------------------------
