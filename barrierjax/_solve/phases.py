@@ -32,7 +32,7 @@ def solve_phase(
     rtol: float,
     atol: float,
     dense: bool = False,
-    max_steps: int = 16384,
+    max_steps: int = 4096,
 ) -> PhaseSolution:
     """Integrate `vector_field(t, y, args)` from `t0` until `switch(t, y, args)` crosses
     zero, or to `t_bound` when there is no switch.
@@ -42,7 +42,9 @@ def solve_phase(
     """
     event = None
     if switch is not None:
-        root_tol = 1e-3 * rtol
+        # The switch is located on the dense interpolant, itself accurate to about rtol;
+        # asking for much less than rounding would exhaust the root finder.
+        root_tol = max(1e-2 * rtol, 1e-13)
         event = diffrax.Event(
             lambda t, y, args, **kwargs: switch(t, y, args),
             root_finder=optx.Newton(rtol=root_tol, atol=root_tol),
