@@ -1,0 +1,63 @@
+"""Smoke test of benchmarks/normal_impact.py: `--quick` runs, exits 0 and writes its JSON.
+
+This checks that the benchmark script works, never how fast anything is (DESIGN.md: a
+benchmark is never a timed test).
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mpmath")
+pytest.importorskip("scipy")
+
+SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "normal_impact.py"
+
+
+def test_normal_impact_benchmark_quick(tmp_path):
+    out = tmp_path / "results"
+    proc = subprocess.run(
+        [sys.executable, str(SCRIPT), "--quick", "--out", str(out)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert "SUMMARY" in proc.stdout
+
+    data = json.loads((out / "normal_impact.json").read_text())
+    for section in (
+        "meta",
+        "scenarios",
+        "error_vs_time",
+        "throughput",
+        "gradient",
+        "scipy",
+        "targets",
+        "surprises",
+    ):
+        assert section in data, section
+    assert data["meta"]["quick"] is True
+    assert set(data["targets"]) == {"scipy_ratio", "closed_form_throughput", "gradient_ratio"}
+    for target in data["targets"].values():
+        assert target["verdict"] in ("PASS", "FAIL")
+
+    rows = data["error_vs_time"]["rows"]
+    assert {r["method"] for r in rows} == {"closed_form", "ode"}
+    # The closed form at rtol 1e-8 agrees with the mpmath reference (a correctness check on
+    # the benchmark's own reference, not a speed check).
+    closed = [r for r in rows if r["method"] == "closed_form" and r["rtol"] == 1e-8]
+    assert closed and closed[0]["ok"] and closed[0]["error"] < 1e-7
+    assert data["throughput"]["rows"]["closed_form"]
+    assert data["gradient"]["rows"]["closed_form"]
+    assert data["scipy"]["rows"]
+    for name in (
+        "normal_impact_error_vs_time.png",
+        "normal_impact_throughput.png",
+        "normal_impact_gradient.png",
+    ):
+        assert (out / name).stat().st_size > 0
