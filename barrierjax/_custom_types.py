@@ -1,7 +1,7 @@
 """Type aliases shared across barrierjax (after diffrax's `_custom_types.py`)."""
 
-from jaxtyping import Array, ArrayLike, Float
+from jaxtyping import Array, Float
 
-RealScalarLike = float | int | ArrayLike
-FloatScalar = Float[Array, ""]
-FloatVector = Float[Array, " n"]
+Scalar = Float[Array, ""]
+Vector = Float[Array, " n"]
+Batchable = Float[Array, "..."]  # a scene leaf: a scalar, or a batch of them

@@ -134,7 +134,7 @@ def format_summary(data: dict) -> str:
         f"  barrier  plastic moment    M0 = {i['plastic_moment_N_m'] / 1e3:10.2f} kN*m",
         f"           mass per length   m  = {i['mass_per_length_kg_m']:10.2f} kg/m",
         f"           backing strength  q0 = {i['backing_strength_N_m'] / 1e3:10.2f} kN/m",
-        f"           axial capacity    N0 = "
+        "           axial capacity    N0 = "
         + ("      none" if axial is None else f"{axial / 1e3:10.2f} kN"),
         f"  vehicle  mass              M  = {i['vehicle_mass_kg']:10.1f} kg",
         f"           crush force       P0 = {i['crush_force_N'] / 1e3:10.2f} kN",

@@ -89,7 +89,7 @@ FORCE_RATIOS_3_2_4 = (1.25, 1.5, 2.0, 3.0, 5.0, 10.0)
 
 def _normal_histories(mass_ratios, force_ratio, n_history=200):
     """`normal_impact` at unit speed for each mass ratio (vmapped), with histories."""
-    solve = lambda mu: normal_impact(mu, force_ratio, 1.0, n_history=n_history)  # noqa: E731
+    solve = lambda mu: normal_impact(mu, force_ratio, 1.0, n_history=n_history)
     return jax.vmap(solve)(jnp.asarray(mass_ratios, dtype=float))
 
 

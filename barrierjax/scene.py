@@ -20,11 +20,9 @@ time with the same message (`equinox.error_if`).
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float
 
 from . import _checks
-
-Scalar = Float[Array, "..."]
+from ._custom_types import Batchable
 
 
 class Barrier(eqx.Module):
@@ -37,10 +35,10 @@ class Barrier(eqx.Module):
       (report 3.4), or None for a beam that carries no axial force.
     """
 
-    plastic_moment: Scalar
-    mass_per_length: Scalar
-    backing_strength: Scalar
-    axial_capacity: Scalar | None
+    plastic_moment: Batchable
+    mass_per_length: Batchable
+    backing_strength: Batchable
+    axial_capacity: Batchable | None
 
     def __init__(self, plastic_moment, mass_per_length, backing_strength, axial_capacity=None):
         self.plastic_moment = _checks.positive("Barrier.plastic_moment", plastic_moment)
@@ -56,8 +54,8 @@ class Barrier(eqx.Module):
 class Vehicle(eqx.Module):
     """A rigid-perfectly-plastic vehicle: `mass` M, crushing at the constant `crush_force` P0."""
 
-    mass: Scalar
-    crush_force: Scalar
+    mass: Batchable
+    crush_force: Batchable
 
     def __init__(self, mass, crush_force):
         self.mass = _checks.positive("Vehicle.mass", mass)
@@ -68,9 +66,9 @@ class Impact(eqx.Module):
     """The vehicle's `speed`, its `angle_deg` to the barrier's axis in (0, 90] (90 is a
     normal impact), and the Coulomb `friction` coefficient between vehicle and barrier."""
 
-    speed: Scalar
-    angle_deg: Scalar
-    friction: Scalar
+    speed: Batchable
+    angle_deg: Batchable
+    friction: Batchable
 
     def __init__(self, speed, angle_deg=90.0, friction=0.0):
         self.speed = _checks.positive("Impact.speed", speed)
@@ -94,23 +92,23 @@ class Scene(eqx.Module):
 class Scales(eqx.Module):
     """The report's characteristic scales, in the scene's units."""
 
-    length: Scalar
-    force: Scalar
-    time: Scalar
-    velocity: Scalar
-    acceleration: Scalar
-    energy: Scalar
+    length: Batchable
+    force: Batchable
+    time: Batchable
+    velocity: Batchable
+    acceleration: Batchable
+    energy: Batchable
 
 
 class Dimensionless(eqx.Module):
     """The report's dimensionless groups of a scene, and the scales that restore units."""
 
-    mass_ratio: Scalar
-    force_ratio: Scalar
-    normal_speed: Scalar
-    tangential_speed: Scalar
-    axial_ratio: Scalar | None
-    friction: Scalar
+    mass_ratio: Batchable
+    force_ratio: Batchable
+    normal_speed: Batchable
+    tangential_speed: Batchable
+    axial_ratio: Batchable | None
+    friction: Batchable
     scales: Scales
 
 

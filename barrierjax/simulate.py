@@ -14,10 +14,9 @@ import numpy as np
 from jax.core import Tracer
 from jaxtyping import Array, Float
 
+from ._custom_types import Batchable
 from .hinge.normal import NormalImpact, normal_impact
 from .scene import Dimensionless, Scene, dimensionless
-
-Scalar = Float[Array, "..."]
 
 
 class History(eqx.Module):
@@ -51,16 +50,16 @@ class Result(eqx.Module):
     - `history`: a `History`, or None when `n_history=0`.
     """
 
-    damage: Scalar
-    max_deflection: Scalar
-    duration: Scalar
-    peak_force: Scalar
-    peak_deceleration: Scalar
-    hinge_extent: Scalar
-    kinetic_energy: Scalar
-    crush_work: Scalar
-    backing_work: Scalar
-    hinge_work: Scalar
+    damage: Batchable
+    max_deflection: Batchable
+    duration: Batchable
+    peak_force: Batchable
+    peak_deceleration: Batchable
+    hinge_extent: Batchable
+    kinetic_energy: Batchable
+    crush_work: Batchable
+    backing_work: Batchable
+    hinge_work: Batchable
     groups: Dimensionless
     model: NormalImpact
     history: History | None

@@ -6,7 +6,7 @@ import jax.numpy as jnp
 
 jax.config.update("jax_enable_x64", True)
 
-import barrierjax as bj  # noqa: E402
+import barrierjax as bj
 
 barrier = bj.Barrier(plastic_moment=105.5e3, mass_per_length=34.2, backing_strength=60e3)
 vehicle = bj.Vehicle(mass=2270.0, crush_force=450e3)

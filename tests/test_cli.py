@@ -13,9 +13,9 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-import barrierjax as bj  # noqa: E402
-from barrierjax import cli  # noqa: E402
-from barrierjax.scene_file import default_scene  # noqa: E402
+import barrierjax as bj
+from barrierjax import cli
+from barrierjax.scene_file import default_scene
 
 G = 9.80665
 REQUIRED = ("damage_m", "max_deflection_m", "duration_s", "peak_deceleration_g")

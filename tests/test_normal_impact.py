@@ -194,7 +194,7 @@ def test_gradients_match_finite_differences(method, mu, phi, v0):
 
 # --- Stability over the whole parameter range (issue item 9). ---
 
-log_uniform = lambda lo, hi: st.floats(math.log(lo), math.log(hi)).map(math.exp)  # noqa: E731
+log_uniform = lambda lo, hi: st.floats(math.log(lo), math.log(hi)).map(math.exp)
 
 
 @settings(max_examples=60, deadline=None)

@@ -9,8 +9,8 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-import barrierjax as bj  # noqa: E402
-from barrierjax.scene_file import (  # noqa: E402
+import barrierjax as bj
+from barrierjax.scene_file import (
     FIELDS,
     SceneFileError,
     default_scene,

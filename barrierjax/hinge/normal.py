@@ -65,14 +65,11 @@ import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float
 
 from .. import _checks
+from .._custom_types import Scalar, Vector
 from .._solve.phases import solve_phase
 from .._solve.quadrature import gauss_legendre, jacobi_product_nodes, jacobi_product_weights
-
-Scalar = Float[Array, ""]
-Vector = Float[Array, " n"]
 
 
 class NormalImpactHistory(eqx.Module):
