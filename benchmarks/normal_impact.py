@@ -904,6 +904,15 @@ def cost_profile(method, n=1000):
 # Plots.
 
 
+def save(fig, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 def plots(out_dir: Path, data: dict):
     import matplotlib
 
@@ -940,11 +949,7 @@ def plots(out_dir: Path, data: dict):
     ax.set_title(f"normal_impact: error vs time, {data['meta']['n_scenarios']} scenarios")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    p = out_dir / "normal_impact_error_vs_time.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    paths.append(p)
+    paths.append(save(fig, out_dir / "normal_impact_error_vs_time.png"))
 
     fig, ax = plt.subplots(figsize=(7, 5))
     for method, rows in data["throughput"]["rows"].items():
@@ -962,11 +967,7 @@ def plots(out_dir: Path, data: dict):
     ax.set_title("normal_impact throughput, array API (vmapped chunks), CPU")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    p = out_dir / "normal_impact_throughput.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    paths.append(p)
+    paths.append(save(fig, out_dir / "normal_impact_throughput.png"))
 
     fig, ax = plt.subplots(figsize=(7, 4))
     for method, rows in data["gradient"]["rows"].items():
@@ -978,11 +979,7 @@ def plots(out_dir: Path, data: dict):
     ax.set_title("normal_impact gradient cost")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    p = out_dir / "normal_impact_gradient.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    paths.append(p)
+    paths.append(save(fig, out_dir / "normal_impact_gradient.png"))
     return paths
 
 
