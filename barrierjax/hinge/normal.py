@@ -200,6 +200,14 @@ class _Decelerative(eqx.Module):
             log_beta_ratio = jnp.log1p((s - self.s_star) / (self.s_star + self.beta))
         return self.b * log_beta_ratio + self.c * jnp.log1p((s - self.s_star) / (self.s_star + self.gamma))
 
+    def hinge_from_chi(self, chi):
+        """S from the ODE state chi = A ln(alpha - S)."""
+        return self.alpha - jnp.exp(chi / self.a)
+
+    def time_per_velocity(self, s):
+        """-dT/dV = 2 S (S + 2 mu) / (S^2 + 3), the inverse of (3.2.15)."""
+        return 2.0 * s * (s + 2.0 * self.mu) / (s**2 + 3.0)
+
     def lever(self, s):
         """2 S (S + 2 mu) / ((S + beta)(S + gamma)), so that dT/dS = lever V / (alpha - S)
         (3.2.16, with p(S) factored as in 3.2.17)."""
@@ -268,7 +276,11 @@ def _tail_integrals(dec: _Decelerative, log_gap, n: int):
     return _integrate(s, dtau, dw)
 
 
-_SPLIT = 0.75  # the head covers [S*, S_m], S_m = alpha - 0.75 (alpha - S*); the tail the rest
+def _split(dec: _Decelerative):
+    """S_m = alpha - 0.75 (alpha - S*), where the head quadrature hands over to the tail,
+    and its log gap ln((alpha - S_m)/(alpha - S*)) = ln 0.75."""
+    s_mid = dec.alpha - 0.75 * (dec.alpha - dec.s_star)
+    return s_mid, jnp.log(jnp.asarray(0.75, s_mid.dtype))
 
 
 def _quadrature_points(rtol: float) -> int:
@@ -287,8 +299,7 @@ def _closed_form(mu, phi, *, rtol, n_history):
     acc = _accelerative_phase(mu, phi)
     dec = _decelerative_constants(mu, acc)
     n = _quadrature_points(rtol)
-    s_mid = dec.alpha - _SPLIT * (dec.alpha - dec.s_star)
-    log_split = jnp.log(jnp.asarray(_SPLIT, s_mid.dtype))
+    s_mid, log_split = _split(dec)
     tau, w, backing, hinge = _head_integrals(dec, s_mid, n) + _tail_integrals(dec, log_split, n)
     t_star, w_star, s_star = acc.t_star, acc.w_star, acc.s_star
     final = dict(
@@ -332,9 +343,9 @@ def _closed_form_history(acc, dec, n, final, n_history):
         hinge_work=0.5 * w1 / acc.s_star,
     )
     log_gap = _history_gaps(dec, n_history)
-    log_split = jnp.log(jnp.asarray(_SPLIT, log_gap.dtype))
+    s_mid, log_split = _split(dec)
     s = dec.alpha - (dec.alpha - dec.s_star) * jnp.exp(log_gap)
-    head = _head_integrals(dec, jnp.minimum(s, dec.alpha - _SPLIT * (dec.alpha - dec.s_star)), n)
+    head = _head_integrals(dec, jnp.minimum(s, s_mid), n)
     totals = jnp.stack(
         [final["t_final"] - acc.t_star, final["w_final"] - acc.w_star]
         + [final[key] - first[key][-1] for key in ("backing_work", "hinge_work")]
@@ -400,9 +411,9 @@ def _decelerative_field(sigma, y, args):
     """
     dec = args
     chi = y[0]
-    s = dec.alpha - jnp.exp(chi / dec.a)
+    s = dec.hinge_from_chi(chi)
     v = dec.v_star * jnp.exp(-sigma)
-    dtau = v * 2.0 * s * (s + 2.0 * dec.mu) / (s**2 + 3.0)
+    dtau = v * dec.time_per_velocity(s)
     dw = v * dtau
     return jnp.stack(
         [
@@ -423,9 +434,9 @@ def _complete_at_rest(dec, sigma_end, y_end):
     ... with g = 2 S (S + 2 mu) / (S^2 + 3); their relative error is O(e^-2 sigma_end).
     """
     chi, tau, w, backing, hinge = y_end
-    s = dec.alpha - jnp.exp(chi / dec.a)
+    s = dec.hinge_from_chi(chi)
     v = dec.v_star * jnp.exp(-sigma_end)
-    g = 2.0 * s * (s + 2.0 * dec.mu) / (s**2 + 3.0)
+    g = dec.time_per_velocity(s)
     dw = 0.5 * v**2 * g
     return s, tau + v * g, w + dw, backing + 0.5 * dw * s, hinge + 0.5 * dw / s
 
@@ -487,7 +498,7 @@ def _ode_history(first, second, dec, final, n_history, sigma_end, time_unit):
     in_s = 10.0 * dec.a * jnp.linspace(0.0, 1.0, half, endpoint=False)
     sigma = jnp.minimum(jnp.sort(jnp.concatenate([in_s, in_v])), sigma_end)
     y2 = jax.vmap(second.dense.evaluate)(sigma)
-    s2 = dec.alpha - jnp.exp(y2[:, 0] / dec.a)
+    s2 = dec.hinge_from_chi(y2[:, 0])
     v2 = jnp.append(dec.v_star * jnp.exp(-sigma), 0.0)
     rest = jnp.stack([final[key] for key in ("t_final", "w_final", "backing_work", "hinge_work")])
     y2 = jnp.concatenate([y2[:, 1:], rest[None, :]])
