@@ -63,6 +63,20 @@ def dense_times(t, count: int = 800) -> np.ndarray:
     return np.union1d(t, np.linspace(t[0], t[-1], count))
 
 
+def _label_line(ax, x, text, **style):
+    """A small grey label just right of the vertical line at data coordinate x."""
+    ax.annotate(
+        text,
+        xy=(x, 0.5),
+        xycoords=("data", "axes fraction"),
+        xytext=(4, 0),
+        textcoords="offset points",
+        fontsize=8,
+        color="0.4",
+        **style,
+    )
+
+
 def histories_figure(result, title: str | None = None) -> Figure:
     """Four panels against time (ms): vehicle and barrier velocity (m/s), contact force
     (kN), hinge position (m) and the barrier's displacement under the vehicle (mm). The end
@@ -95,17 +109,7 @@ def histories_figure(result, title: str | None = None) -> Figure:
         ax.grid(True, alpha=0.3)
     for ax in axes[1]:
         ax.set_xlabel("time (ms)")
-    axes[0, 0].annotate(
-        "end of accelerative phase",
-        xy=(t_star, 0.5),
-        xycoords=("data", "axes fraction"),
-        xytext=(4, 0),
-        textcoords="offset points",
-        rotation=90,
-        va="center",
-        fontsize=8,
-        color="0.4",
-    )
+    _label_line(axes[0, 0], t_star, "end of accelerative phase", rotation=90, va="center")
     if title:
         fig.suptitle(title)
     return fig
@@ -149,15 +153,7 @@ def deflected_shape_figure(result, count: int = 6, title: str | None = None) -> 
     extent = float(result.hinge_extent)
     for side in (-extent, extent):
         ax.axvline(side, color="0.5", linestyle=":", linewidth=1)
-    ax.annotate(
-        "final hinge",
-        xy=(extent, 0.5),
-        xycoords=("data", "axes fraction"),
-        xytext=(4, 0),
-        textcoords="offset points",
-        fontsize=8,
-        color="0.4",
-    )
+    _label_line(ax, extent, "final hinge")
     ax.invert_yaxis()  # the barrier is pushed away from the traffic, drawn downwards
     ax.set_xlabel("distance along the barrier from the impact point (m)")
     ax.set_ylabel("deflection (mm)")
