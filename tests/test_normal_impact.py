@@ -185,6 +185,7 @@ def test_gradients_match_finite_differences(method, mu, phi, v0):
         return jnp.stack([getattr(r, f) for f in fields])
 
     jacobian = jax.jacrev(outputs)(x)
+    assert jnp.allclose(jax.jacfwd(outputs)(x), jacobian, rtol=1e-10, atol=0.0)
     for i in range(3):
         h = 1e-5 * x[i]
         fd = (outputs(x.at[i].add(h)) - outputs(x.at[i].add(-h))) / (2 * h)

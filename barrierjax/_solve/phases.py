@@ -8,15 +8,18 @@ give a zero one).
 
 import diffrax
 import equinox as eqx
+import jax
 import optimistix as optx
-from jaxtyping import Array, Float
+from jaxtyping import Array, Float, Int, PyTree
 
 
 class PhaseSolution(eqx.Module):
-    """The end of one phase and, if requested, its dense interpolant."""
+    """The end of one phase, its number of accepted and rejected steps and, if requested,
+    its dense interpolant."""
 
     t_end: Float[Array, ""]
-    y_end: Float[Array, " state"]
+    y_end: PyTree[Float[Array, ""]]
+    num_steps: Int[Array, ""]
     dense: diffrax.Solution | None
 
 
@@ -61,6 +64,9 @@ def solve_phase(
         stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
         event=event,
         max_steps=max_steps,
+        # Models differentiate their solves in forward mode (`sensitivity.py`); a plain
+        # while loop then serves both the forward pass and the JVP.
+        adjoint=diffrax.ForwardMode(),
         throw=True,
     )
     t_end = solution.ts[-1]
@@ -70,4 +76,9 @@ def solve_phase(
             ~solution.event_mask,
             "phase ended at its time bound without reaching its switching condition",
         )
-    return PhaseSolution(t_end=t_end, y_end=solution.ys[-1], dense=solution if dense else None)
+    return PhaseSolution(
+        t_end=t_end,
+        y_end=jax.tree.map(lambda y: y[-1], solution.ys),
+        num_steps=solution.stats["num_steps"],
+        dense=solution if dense else None,
+    )
