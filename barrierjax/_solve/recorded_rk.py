@@ -1,0 +1,187 @@
+"""An adaptive Dormand-Prince 5(4) step loop whose vector field may read the solution's own
+past, recorded in a fixed-size buffer.
+
+diffrax vector fields see only the current state, but a state-dependent delay (the slope
+under a moving load, report 3.3) needs the solution at an earlier, state-dependent time.
+This loop records one sample per accepted step into a buffer carried in the loop state
+and hands the buffer to the vector field. A phase ends where a real-valued event function
+falls to zero: the crossing step is retaken with the length that puts the event exactly
+on zero (secant iterations on the step length), so the phase's end carries an exact
+gradient. Differentiate in forward mode (`sensitivity.forward_jacobian_jvp`): the loop is
+a `lax.while_loop`.
+"""
+
+from collections.abc import Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float, Int, PyTree
+
+# Dormand & Prince (1980), the tableau of diffrax.Dopri5; the last stage is first-same-as-last.
+_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+_A = [
+    [],
+    [1 / 5],
+    [3 / 40, 9 / 40],
+    [44 / 45, -56 / 15, 32 / 9],
+    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729],
+    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
+    [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84],
+]
+_B_ERROR = np.array(
+    [
+        35 / 384 - 5179 / 57600,
+        0.0,
+        500 / 1113 - 7571 / 16695,
+        125 / 192 - 393 / 640,
+        -2187 / 6784 + 92097 / 339200,
+        11 / 84 - 187 / 2100,
+        -1 / 40,
+    ]
+)
+
+
+class Recording(eqx.Module):
+    """`samples` (leaves with a leading axis of `capacity`) of which the first `count` are
+    filled; the rest repeat the last filled sample or hold the initial fill."""
+
+    samples: PyTree[Float[Array, " capacity"]]
+    count: Int[Array, ""]
+
+    def append(self, sample):
+        samples = jax.tree.map(lambda buf, x: buf.at[self.count].set(x), self.samples, sample)
+        return Recording(samples, jnp.minimum(self.count + 1, _capacity(samples) - 1))
+
+
+def _capacity(samples):
+    return jax.tree.leaves(samples)[0].shape[0]
+
+
+def empty_recording(sample, capacity: int, fill) -> Recording:
+    """A buffer shaped like `sample`, every leaf filled with `fill(leaf)`."""
+    return Recording(
+        jax.tree.map(lambda x: jnp.full((capacity,), fill(x), jnp.result_type(x)), sample),
+        jnp.zeros((), jnp.int32),
+    )
+
+
+def _combine(y, h, weights, ks):
+    return jax.tree.map(
+        lambda y0, *k: y0 + h * sum(w * ki for w, ki in zip(weights, k) if w != 0.0), y, *ks
+    )
+
+
+def _step(field, t, y, f0, h, args, recording):
+    ks = [f0]
+    for c, a in zip(_C[1:], _A[1:]):
+        ks.append(field(t + c * h, _combine(y, h, a, ks), args, recording))
+    y1 = _combine(y, h, _A[6], ks[:6])
+    error = _combine(jax.tree.map(jnp.zeros_like, y), h, _B_ERROR, ks)
+    return y1, error, ks[6]
+
+
+def _error_ratio(y0, y1, error, rtol, atol):
+    scaled = jax.tree.map(
+        lambda a, b, e: (e / (atol + rtol * jnp.maximum(jnp.abs(a), jnp.abs(b)))) ** 2,
+        y0,
+        y1,
+        error,
+    )
+    leaves = jax.tree.leaves(scaled)
+    return jnp.sqrt(sum(leaves) / len(leaves))
+
+
+class PhaseEnd(eqx.Module):
+    t: Float[Array, ""]
+    y: PyTree[Float[Array, ""]]
+    derivative: PyTree[Float[Array, ""]]
+    recording: Recording
+    steps: Int[Array, ""]
+
+
+def solve_recorded(
+    field: Callable,
+    y0,
+    t0,
+    args,
+    recording: Recording,
+    *,
+    record: Callable,
+    event: Callable,
+    rtol: float,
+    atol: float,
+    h0,
+    max_step: Callable,
+    max_steps: int,
+    secant_iterations: int = 16,
+) -> PhaseEnd:
+    """Integrate `field(t, y, args, recording)` from `t0` until `event(t, y, f, args,
+    recording)`, positive at the start, falls to zero.
+
+    `record(t, y, f, args)` gives the sample appended to `recording` after each accepted
+    step (and at the start); `max_step(t, y, f, args, recording)` bounds the step, for
+    example so that a delayed lookup never reaches past the recorded history. An event
+    that is not positive at the start ends the phase there, after no step.
+    """
+    f0 = field(t0, y0, args, recording)
+    recording = recording.append(record(t0, y0, f0, args))
+    dtype = jnp.result_type(t0)
+    ended_at_start = event(t0, y0, f0, args, recording) <= 0.0
+
+    def cond(carry):
+        t, y, f, h, rec, steps, crossed = carry
+        return ~crossed & (steps < max_steps)
+
+    def body(carry):
+        t, y, f, h, rec, steps, _ = carry
+        h = jnp.minimum(h, max_step(t, y, f, args, rec))
+        y1, error, f1 = _step(field, t, y, f, h, args, rec)
+        ratio = _error_ratio(y, y1, error, rtol, atol)
+        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(y1)]))
+        accept = (ratio <= 1.0) & finite
+        crossed = accept & (event(t + h, y1, f1, args, rec) <= 0.0)
+        advance = accept & ~crossed
+        new_rec = jax.lax.cond(advance, lambda r: r.append(record(t + h, y1, f1, args)), lambda r: r, rec)
+        keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(advance, a, b), new, old)
+        factor = jnp.where(finite, jnp.clip(0.9 * ratio ** -0.2, 0.2, 5.0), 0.2)
+        h_next = jnp.where(crossed, h, h * factor)
+        return (
+            jnp.where(advance, t + h, t),
+            keep(y1, y),
+            keep(f1, f),
+            h_next.astype(dtype),
+            new_rec,
+            steps + 1,
+            crossed,
+        )
+
+    start = (t0, y0, f0, jnp.asarray(h0, dtype), recording, jnp.zeros((), jnp.int32), ended_at_start)
+    t, y, f, h, recording, steps, crossed = jax.lax.while_loop(cond, body, start)
+    t = eqx.error_if(t, ~crossed, "step loop reached max_steps before the phase ended")
+
+    # The crossing lies within (t, t + h]: Illinois regula falsi on the step length keeps
+    # the bracket, and its last secant carries the event's implicit derivative.
+    def event_after(length):
+        y1, _, f1 = _step(field, t, y, f, length, args, recording)
+        return event(t + length, y1, f1, args, recording)
+
+    def illinois(state, _):
+        lo, e_lo, hi, e_hi = state
+        moved = e_hi != e_lo  # converged to rounding: stay
+        mid = hi - e_hi * (hi - lo) / jnp.where(moved, e_hi - e_lo, 1.0)
+        mid = jnp.where(moved, mid, hi)
+        e_mid = event_after(mid)
+        same_side = (e_mid > 0.0) == (e_hi > 0.0)
+        lo, e_lo = jnp.where(same_side, lo, hi), jnp.where(same_side, 0.5 * e_lo, e_hi)
+        return (lo, e_lo, mid, e_mid), None
+
+    e_start = event(t, y, f, args, recording)
+    (_, _, length, _), _ = jax.lax.scan(
+        illinois, (jnp.zeros_like(h), e_start, h, event_after(h)), None, length=secant_iterations
+    )
+    length = jnp.where(ended_at_start, 0.0, length)
+    y_end, _, f_end = _step(field, t, y, f, length, args, recording)
+    recording = recording.append(record(t + length, y_end, f_end, args))
+    return PhaseEnd(t=t + length, y=y_end, derivative=f_end, recording=recording, steps=steps)

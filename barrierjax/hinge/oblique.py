@@ -1,0 +1,678 @@
+"""Oblique impact of a rigid-plastic vehicle on a rigid-plastic beam on a rigid-plastic
+backing (report section 3.3), and the moving constant load of its accelerative phase.
+
+Dimensionless variables as in 3.2 (ERRATA): lengths over L = 2 (M0/q0)^1/2, forces over
+P_b = 4 (M0 q0)^1/2, time over t0 = m^1/2 M0^1/4 / q0^3/4, mass ratio mu = M/(m L). The
+contact point moves along the beam at the vehicle's tangential speed V_H; S1 is the
+distance from the contact point to the hinge ahead of it (the right hinge), S2 to the
+hinge behind it, and V0 the beam's velocity under the contact point.
+
+Equations of motion, (3.3.16) with the force ratio g = P/P_b and the load speed c = F':
+
+    V0' = -3 / (2 S1 S2) - 1/2 + 4 g / (S1 + S2)
+    V0 (S1' + 3/2 c) = 3/4 (S1 + S2)/(S1 S2) - S1/2 - 2 g S1 / (S1 + S2)
+    V0 (S2' - 3/2 c) = 3/4 (S1 + S2)/(S1 S2) - S2/2 - 2 g S2 / (S1 + S2)
+
+(3.3.10 as corrected in ERRATA: 4P in the first line, P xi2 in the third.)
+
+The memory of 3.3.4-3.3.6. A point x ahead of the load lies still until the right hinge
+reaches it, then rides the right rigid segment, whose slope rate is -V0/S1, until the load
+arrives. With Phi(T) = int_0^T V0/S1, the slope under the load is
+
+    theta = Psi(F) - Phi,   Psi(x) = Phi at the time the right hinge passed x,
+
+and (3.3.21)'s R is V_H Psi'(F) F' + V_H' theta: the first term is V_H^2 times the
+curvature dPsi/dx that the right hinge left behind at the load point. Psi is the curve
+(H, Phi) traced by the right hinge H = F + S1; it is recorded, one sample per accepted
+step, in a fixed-size buffer that the vector field reads (`_solve.recorded_rk`): the delay
+T1 of (3.3.5) is never solved for. Psi = 0 ahead of the initial hinge, x < S*.
+
+Phases.
+1. Crushing (accelerative, in time T): the vehicle crushes at constant force phi; its
+   normal velocity U falls at phi/mu. At T = 0, V0 = 0 and S' = g/V0 is 0/0; its limit
+   is the antisymmetric mode S1' = -S2' = -3/2 a V_H / (a + 1/2 + phi/S*) with
+   a = V0'(0) (linearise the second and third lines about S1 = S2 = S*), used exactly at
+   V0 = 0. The phase ends where the vehicle stops crushing: U = V0 + theta V_H.
+2. Contact (decelerative): the vehicle is rigid and follows the contact point, so
+   g = -mu d/dT (V0 + theta V_H), which with the first line gives (3.3.22)'s form
+
+       g (1 - f theta + 4 mu / (S1 + S2))
+           = mu (S1 S2 + 3) / (2 S1 S2) + mu V_H V0 / S1 - mu V_H^2 Psi'(F),
+
+   f being the friction coefficient. V0 -> 0 at the end, where S' = g_i/V0 is 0/0
+   again; the phase is integrated in s, dT/ds = V0, in which every rate is regular, with
+   ln V0 as state; it ends at V0 = V0* rtol e^-3, and the rest is added analytically.
+3. Free (only after separation): where g would fall below zero the vehicle leaves; the
+   beam moves on alone (g = 0, the central hinge where the load left it) to rest. The
+   report keeps contact to the end; this phase is where the model departs from it.
+
+Friction (the `friction` option): Coulomb, tangential force f P on the vehicle, none on
+the beam (as in the report). The normal force acts along the undeformed normal, so the
+vehicle's kinetic-energy loss is crush + friction work + work on the barrier (P V0) +
+`slope_work` (P theta V_H): the report holds V_H fixed, and this last term is the work
+of whatever holds it so; it is reported, not fed back into V_H.
+"""
+
+import functools
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .. import _checks
+from .._custom_types import Scalar
+from .._solve.recorded_rk import Recording, empty_recording, solve_recorded
+from .._solve.sensitivity import forward_jacobian_jvp
+
+# --------------------------------------------------------------------------------------
+# Results.
+
+
+class ObliqueImpactHistory(eqx.Module):
+    """One sample per accepted solver step, `n_saved` of them; the rest of each array
+    repeats the final state. `displacement[k, j]` is W(x[j], time[k])."""
+
+    time: Scalar
+    s1: Scalar
+    s2: Scalar
+    v0: Scalar
+    vehicle_normal_velocity: Scalar
+    vehicle_tangential_velocity: Scalar
+    contact_position: Scalar
+    contact_force: Scalar
+    slope: Scalar
+    crush: Scalar
+    contact_displacement: Scalar
+    backing_work: Scalar
+    hinge_work: Scalar
+    friction_work: Scalar
+    slope_work: Scalar
+    beam_kinetic_energy: Scalar
+    vehicle_kinetic_energy: Scalar
+    x: Scalar
+    displacement: Scalar
+    n_saved: Scalar
+
+
+class ObliqueImpact(eqx.Module):
+    """Dimensionless response to an oblique impact (report 3.3)."""
+
+    t_star: Scalar
+    t_final: Scalar
+    s1_final: Scalar
+    s2_final: Scalar
+    w_final: Scalar
+    max_deflection: Scalar
+    damage: Scalar
+    exit_normal_speed: Scalar
+    exit_tangential_speed: Scalar
+    exit_angle_deg: Scalar
+    separated: Scalar
+    crush_work: Scalar
+    backing_work: Scalar
+    hinge_work: Scalar
+    friction_work: Scalar
+    slope_work: Scalar
+    history: ObliqueImpactHistory | None
+
+
+class MovingLoad(eqx.Module):
+    s1: Scalar
+    s2: Scalar
+    v0: Scalar
+    history: ObliqueImpactHistory | None
+
+
+# --------------------------------------------------------------------------------------
+# The beam mechanism, (3.3.16).
+
+
+def _acceleration(s1, s2, force):
+    return -1.5 / (s1 * s2) - 0.5 + 4.0 * force / (s1 + s2)
+
+
+def _hinge_terms(s1, s2, force):
+    """g1, g2: V0 (S1' + 3/2 c) = g1 and V0 (S2' - 3/2 c) = g2."""
+    total = s1 + s2
+    common = 0.75 * total / (s1 * s2)
+    return (
+        common - 0.5 * s1 - 2.0 * force * s1 / total,
+        common - 0.5 * s2 - 2.0 * force * s2 / total,
+    )
+
+
+def _beam_powers(v0, s1, s2):
+    """Backing and hinge dissipation rates: q0 int v dx and M0 times the hinges' rotation
+    rates (V0/S1, V0/S2 and their sum at the load), in the units of 3.2."""
+    return 0.25 * v0 * (s1 + s2), 0.25 * v0 * (1.0 / s1 + 1.0 / s2)
+
+
+def _beam_kinetic_energy(v0, s1, s2):
+    return v0**2 * (s1 + s2) / 6.0
+
+
+def _slope_memory(recording: Recording, x):
+    """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by cubic Hermite
+    interpolation of the recorded (H, Phi, dPhi/dH); zero ahead of the initial hinge."""
+    h = recording.samples["hinge"]
+    phi = recording.samples["rotation"]
+    slope = recording.samples["curvature"]
+    last = recording.count - 1
+    i = jnp.clip(jnp.searchsorted(h, x, side="right") - 1, 0, h.shape[0] - 2)
+    interior = i + 1 <= last
+    j = jnp.where(interior, i + 1, i)
+    width = jnp.where(interior, h[j] - h[i], 1.0)
+    u = jnp.where(interior, (x - h[i]) / width, 0.0)
+    u2, u3 = u * u, u * u * u
+    hermite = (
+        (2 * u3 - 3 * u2 + 1) * phi[i]
+        + (u3 - 2 * u2 + u) * width * slope[i]
+        + (-2 * u3 + 3 * u2) * phi[j]
+        + (u3 - u2) * width * slope[j]
+    )
+    hermite_slope = (
+        (6 * u2 - 6 * u) * phi[i]
+        + (3 * u2 - 4 * u + 1) * width * slope[i]
+        + (-6 * u2 + 6 * u) * phi[j]
+        + (3 * u2 - 2 * u) * width * slope[j]
+    ) / width
+    # Past the last sample (only within a step, which max_step keeps short): linear.
+    beyond = phi[i] + slope[i] * (x - h[i])
+    psi = jnp.where(interior, hermite, beyond)
+    dpsi = jnp.where(interior, hermite_slope, slope[i])
+    ahead = x < h[0]
+    return jnp.where(ahead, 0.0, psi), jnp.where(ahead, 0.0, dpsi)
+
+
+# --------------------------------------------------------------------------------------
+# States and vector fields.
+
+
+class _Params(eqx.Module):
+    mu: Scalar
+    phi: Scalar
+    friction: Scalar
+    s_star: Scalar
+    moving_load: bool = eqx.field(static=True, default=False)
+
+
+class _Crushing(eqx.Module):
+    """Phase 1 state, against time T."""
+
+    v0: Scalar
+    s1: Scalar
+    s2: Scalar
+    position: Scalar
+    rotation: Scalar  # Phi
+    vehicle_normal: Scalar
+    vehicle_tangential: Scalar
+    crush: Scalar
+    contact_displacement: Scalar
+    backing_work: Scalar
+    hinge_work: Scalar
+    friction_work: Scalar
+    slope_work: Scalar
+
+
+class _Sliding(eqx.Module):
+    """Phase 2 and 3 state, against s with dT/ds = V0."""
+
+    log_v0: Scalar
+    s1: Scalar
+    s2: Scalar
+    time: Scalar
+    position: Scalar
+    rotation: Scalar
+    vehicle_normal: Scalar  # used after separation only
+    vehicle_tangential: Scalar
+    contact_displacement: Scalar
+    backing_work: Scalar
+    hinge_work: Scalar
+    friction_work: Scalar
+    slope_work: Scalar
+
+
+def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
+    vh = y.vehicle_tangential
+    force = p.phi
+    dv0 = _acceleration(y.s1, y.s2, force)
+    g1, g2 = _hinge_terms(y.s1, y.s2, force)
+    moving = y.v0 > 0.0
+    safe_v0 = jnp.where(moving, y.v0, 1.0)
+    # At V0 = 0 (T = 0 only) the 0/0 limit: the antisymmetric mode of the linearisation.
+    start = -1.5 * dv0 * vh / (dv0 + 0.5 + p.phi / p.s_star)
+    psi, _ = _slope_memory(recording, y.position)
+    theta = psi - y.rotation
+    contact_velocity = y.v0 + theta * vh
+    backing, hinge = _beam_powers(y.v0, y.s1, y.s2)
+    vehicle = 0.0 if p.moving_load else 1.0
+    return _Crushing(
+        v0=dv0,
+        s1=jnp.where(moving, g1 / safe_v0 - 1.5 * vh, start),
+        s2=jnp.where(moving, g2 / safe_v0 + 1.5 * vh, -start),
+        position=vh,
+        rotation=y.v0 / y.s1,
+        vehicle_normal=-vehicle * force / p.mu,
+        vehicle_tangential=-vehicle * p.friction * force / p.mu,
+        crush=vehicle * (y.vehicle_normal - contact_velocity),
+        contact_displacement=contact_velocity,
+        backing_work=backing,
+        hinge_work=hinge,
+        friction_work=p.friction * force * vh,
+        slope_work=force * theta * vh,
+    )
+
+
+def _contact_force(y: _Sliding, p: _Params, recording):
+    """(force ratio, slope under the load): (3.3.20)-(3.3.22) solved for the force."""
+    v0 = jnp.exp(y.log_v0)
+    vh = y.vehicle_tangential
+    psi, curvature = _slope_memory(recording, y.position)
+    theta = psi - y.rotation
+    s1, s2 = y.s1, y.s2
+    numerator = p.mu * (s1 * s2 + 3.0) / (2.0 * s1 * s2) + p.mu * vh * v0 / s1 - p.mu * vh**2 * curvature
+    force = numerator / (1.0 - p.friction * theta + 4.0 * p.mu / (s1 + s2))
+    return force, theta
+
+
+def _sliding_field(in_contact: bool):
+    def field(s, y: _Sliding, p: _Params, recording) -> _Sliding:
+        v0 = jnp.exp(y.log_v0)
+        vh = y.vehicle_tangential
+        if in_contact:
+            force, theta = _contact_force(y, p, recording)
+            load_speed = vh
+        else:
+            force, theta, load_speed = 0.0, 0.0, 0.0
+        g1, g2 = _hinge_terms(y.s1, y.s2, force)
+        backing, hinge = _beam_powers(v0, y.s1, y.s2)
+        contact_velocity = v0 + theta * load_speed
+        zero = jnp.zeros_like(v0)
+        return _Sliding(
+            log_v0=_acceleration(y.s1, y.s2, force),
+            s1=g1 - 1.5 * load_speed * v0,
+            s2=g2 + 1.5 * load_speed * v0,
+            time=v0,
+            position=v0 * load_speed,
+            rotation=v0 * v0 / y.s1,
+            vehicle_normal=zero,
+            vehicle_tangential=-v0 * p.friction * force / p.mu,
+            contact_displacement=v0 * contact_velocity,
+            backing_work=v0 * backing,
+            hinge_work=v0 * hinge,
+            friction_work=v0 * p.friction * force * vh,
+            slope_work=v0 * force * theta * vh,
+        )
+
+    return field
+
+
+# --------------------------------------------------------------------------------------
+# What each accepted step records: the right hinge's trace for the memory, and the
+# quantities of the histories.
+
+
+def _sample(phase, time, v0, s1, s2, position, rotation, hinge_speed, rotation_rate, **extra):
+    moving = hinge_speed > 0.0
+    curvature = jnp.where(moving, rotation_rate / jnp.where(moving, hinge_speed, 1.0), 0.0)
+    return dict(
+        hinge=position + s1,
+        rotation=rotation,
+        curvature=curvature,
+        phase=jnp.full_like(v0, phase),
+        time=time,
+        v0=v0,
+        s1=s1,
+        s2=s2,
+        position=position,
+        **extra,
+    )
+
+
+def _record_crushing(t, y: _Crushing, f: _Crushing, p: _Params):
+    return _sample(
+        1.0,
+        t,
+        y.v0,
+        y.s1,
+        y.s2,
+        y.position,
+        y.rotation,
+        f.position + f.s1,
+        f.rotation,
+        vehicle_normal=y.vehicle_normal,
+        vehicle_tangential=y.vehicle_tangential,
+        force=jnp.full_like(y.v0, 0.0 if p.moving_load else 1.0) * p.phi,
+        slope=f.slope_work / jnp.where(f.position != 0.0, p.phi * f.position, 1.0),
+        crush=y.crush,
+        contact_displacement=y.contact_displacement,
+        backing_work=y.backing_work,
+        hinge_work=y.hinge_work,
+        friction_work=y.friction_work,
+        slope_work=y.slope_work,
+    )
+
+
+def _record_sliding(in_contact: bool):
+    def record(s, y: _Sliding, f: _Sliding, p: _Params):
+        # f holds d/ds = V0 d/dT.
+        v0 = jnp.exp(y.log_v0)
+        if in_contact:
+            force = (f.log_v0 + 1.5 / (y.s1 * y.s2) + 0.5) * (y.s1 + y.s2) / 4.0
+            vehicle_normal = f.contact_displacement / v0
+            slope = (vehicle_normal - v0) / jnp.where(f.position != 0.0, f.position / v0, 1.0)
+        else:
+            force = jnp.zeros_like(v0)
+            vehicle_normal = y.vehicle_normal
+            slope = jnp.zeros_like(v0)
+        return _sample(
+            2.0 if in_contact else 3.0,
+            y.time,
+            v0,
+            y.s1,
+            y.s2,
+            y.position,
+            y.rotation,
+            f.position + f.s1,
+            f.rotation,
+            vehicle_normal=vehicle_normal,
+            vehicle_tangential=y.vehicle_tangential,
+            force=force,
+            slope=slope,
+            crush=jnp.zeros_like(v0),  # the phase-1 crush, filled in afterwards
+            contact_displacement=y.contact_displacement,
+            backing_work=y.backing_work,
+            hinge_work=y.hinge_work,
+            friction_work=y.friction_work,
+            slope_work=y.slope_work,
+        )
+
+    return record
+
+
+def _empty_recording(capacity, dtype):
+    names = (
+        "hinge rotation curvature phase time v0 s1 s2 position vehicle_normal "
+        "vehicle_tangential force slope crush contact_displacement backing_work hinge_work "
+        "friction_work slope_work"
+    ).split()
+    # Unrecorded hinge positions are +inf, so that a sorted search never lands on them.
+    samples = {n: jnp.full((capacity,), jnp.inf if n == "hinge" else 0.0, dtype) for n in names}
+    return Recording(samples, jnp.zeros((), jnp.int32))
+
+
+# --------------------------------------------------------------------------------------
+# The phases.
+
+
+def _lookup_bound(rate_of_position):
+    """A step bound keeping the load's position within the recorded trace of the hinge:
+    at most half the gap between the load and the last recorded hinge position."""
+
+    def max_step(t, y, f, p, recording):
+        last = recording.samples["hinge"][recording.count - 1]
+        rate = rate_of_position(y)
+        gap = jnp.maximum(last - y.position, 0.0)
+        return jnp.where(rate > 0.0, 0.5 * gap / jnp.where(rate > 0.0, rate, 1.0), jnp.inf)
+
+    return max_step
+
+
+# In s, ln V0 falls at the rate |V0'|, steadily once the hinges have settled, where the
+# error estimate would let the step grow without bound: cap it at this many e-folds of V0.
+_EFOLDS_PER_STEP = 2.0
+
+
+def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
+    """All phases in the speed-free dimensionless variables. With `t_end`, the moving
+    load: phase 1 alone with no vehicle, to T = t_end."""
+    dtype = jnp.result_type(mu)
+    zero = jnp.zeros((), dtype)
+    root = jnp.sqrt(phi**2 + 3.0)
+    s_star = 3.0 / (root + phi)
+    moving_load = t_end is not None
+    p = _Params(mu=mu, phi=phi, friction=friction, s_star=s_star, moving_load=moving_load)
+    recording = _empty_recording(3 * max_steps + 8, dtype)
+    atol = 1e-3 * rtol
+    acceleration = (phi - s_star) / s_star
+    time_scale = t_end if moving_load else 1.0 / (acceleration + phi / mu)
+
+    crushing = _Crushing(
+        v0=zero, s1=s_star, s2=s_star, position=zero, rotation=zero, vehicle_normal=zero + vn,
+        vehicle_tangential=zero + vh, crush=zero, contact_displacement=zero, backing_work=zero,
+        hinge_work=zero, friction_work=zero, slope_work=zero,
+    )
+    if moving_load:
+        event = lambda t, y, f, p, r: t_end - t
+    else:
+        event = lambda t, y, f, p, r: y.vehicle_normal - f.contact_displacement
+    first = solve_recorded(
+        _crushing_field, crushing, zero, p, recording, record=_record_crushing, event=event,
+        rtol=rtol, atol=atol, h0=1e-2 * time_scale * rtol**0.2,
+        max_step=_lookup_bound(lambda y: y.vehicle_tangential), max_steps=max_steps,
+    )
+    if moving_load:
+        return p, first, None, None
+    y = first.y
+    contact = _Sliding(
+        log_v0=jnp.log(y.v0), s1=y.s1, s2=y.s2, time=first.t, position=y.position,
+        rotation=y.rotation, vehicle_normal=first.derivative.contact_displacement,
+        vehicle_tangential=y.vehicle_tangential, contact_displacement=y.contact_displacement,
+        backing_work=y.backing_work, hinge_work=y.hinge_work, friction_work=y.friction_work,
+        slope_work=y.slope_work,
+    )
+    log_rest = jnp.log(y.v0) + math.log(rtol) - 3.0
+
+    def contact_event(s, y, f, p, r):
+        force, _ = _contact_force(y, p, r)
+        return jnp.minimum(force / p.phi, y.log_v0 - log_rest)
+
+    lookup_bound = _lookup_bound(lambda y: jnp.exp(y.log_v0) * y.vehicle_tangential)
+
+    def sliding(in_contact, start, recording, event):
+        field = _sliding_field(in_contact)
+        rate = field(zero, start, p, recording).log_v0
+        return solve_recorded(
+            field, start, zero, p, recording, record=_record_sliding(in_contact), event=event,
+            rtol=rtol, atol=atol, h0=1e-2 * rtol**0.2 / jnp.abs(rate),
+            max_step=lambda s, y, f, p, r: jnp.minimum(
+                lookup_bound(s, y, f, p, r), _EFOLDS_PER_STEP / jnp.abs(f.log_v0)
+            ),
+            max_steps=max_steps,
+        )
+
+    second = sliding(True, contact, first.recording, contact_event)
+    force_end, _ = _contact_force(second.y, p, second.recording)
+    separated = force_end / phi < second.y.log_v0 - log_rest
+    # The free phase runs only after a separation; otherwise its event is negative at its
+    # start and it takes no step.
+    free_rest = jnp.where(separated, log_rest, second.y.log_v0 + 1.0)
+    vehicle_exit = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
+    free_start = eqx.tree_at(lambda s: s.vehicle_normal, second.y, vehicle_exit)
+    third = sliding(False, free_start, second.recording, lambda s, y, f, p, r: y.log_v0 - free_rest)
+    return p, first, second, (third, separated)
+
+
+def _rest(end, in_contact):
+    """Add the motion from V0_end = V0* rtol e^-3 to rest, with the hinges frozen and the
+    deceleration constant (its error is far below rtol): (time, extra displacement under
+    the load)."""
+    v0 = jnp.exp(end.y.log_v0)
+    remaining = v0 / jnp.abs(end.derivative.log_v0)
+    sliding = end.derivative.contact_displacement / v0 - v0 if in_contact else 0.0
+    return remaining, (0.5 * v0 + sliding) * remaining
+
+
+def _displacement_field(samples, count, x):
+    """W(x, T_k) for every recorded T_k: the velocity field (3.3.2) integrated over the
+    recorded steps by the trapezoidal rule (error O(step^2) where a hinge crosses x)."""
+    v0, s1, s2, position = (samples[k][:, None] for k in ("v0", "s1", "s2", "position"))
+    offset = x[None, :] - position
+    v = v0 * jnp.where(offset >= 0.0, jnp.maximum(1.0 - offset / s1, 0.0), jnp.maximum(1.0 + offset / s2, 0.0))
+    dt = jnp.diff(samples["time"])[:, None] * (jnp.arange(1, v.shape[0])[:, None] < count)
+    increments = 0.5 * (v[1:] + v[:-1]) * dt
+    return jnp.concatenate([jnp.zeros_like(v[:1]), jnp.cumsum(increments, axis=0)])
+
+
+def _padded(samples, count):
+    """Repeat the last recorded sample over the unfilled tail."""
+    index = jnp.minimum(jnp.arange(jax.tree.leaves(samples)[0].shape[0]), count - 1)
+    return jax.tree.map(lambda a: a[index], samples)
+
+
+def _history(samples, count, p: _Params, n_x):
+    x = jnp.linspace(
+        jnp.min(samples["position"] - samples["s2"]), jnp.max(samples["position"] + samples["s1"]), n_x
+    )
+    vn, vh = samples["vehicle_normal"], samples["vehicle_tangential"]
+    vehicle_energy = 0.0 if p.moving_load else 0.5 * p.mu * (vn**2 + vh**2)
+    return ObliqueImpactHistory(
+        time=samples["time"],
+        s1=samples["s1"],
+        s2=samples["s2"],
+        v0=samples["v0"],
+        vehicle_normal_velocity=vn,
+        vehicle_tangential_velocity=vh,
+        contact_position=samples["position"],
+        contact_force=samples["force"],
+        slope=samples["slope"],
+        crush=samples["crush"],
+        contact_displacement=samples["contact_displacement"],
+        backing_work=samples["backing_work"],
+        hinge_work=samples["hinge_work"],
+        friction_work=samples["friction_work"],
+        slope_work=samples["slope_work"],
+        beam_kinetic_energy=_beam_kinetic_energy(samples["v0"], samples["s1"], samples["s2"]),
+        vehicle_kinetic_energy=jnp.zeros_like(vn) + vehicle_energy,
+        x=x,
+        displacement=_displacement_field(samples, count, x),
+        n_saved=count,
+    )
+
+
+def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
+    p, first, second, (third, separated) = _solve(mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps)
+    damage = first.y.crush
+    contact_rest, contact_extra = _rest(second, True)
+    free_rest, free_extra = _rest(third, False)
+    end = third.y
+    t_final = end.time + jnp.where(separated, free_rest, contact_rest)
+    w_final = end.contact_displacement + jnp.where(separated, free_extra, contact_extra)
+    # At separation the vehicle keeps the load point's velocity; at rest in contact it is
+    # (3.3.3) with V0 = 0: theta V_H.
+    _, theta_end = _contact_force(second.y, p, second.recording)
+    at_separation = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
+    exit_normal = jnp.where(separated, at_separation, theta_end * second.y.vehicle_tangential)
+    exit_tangential = second.y.vehicle_tangential
+    recording = third.recording
+    samples = _padded(recording.samples, recording.count)
+    samples["crush"] = jnp.where(samples["phase"] > 1.0, damage, samples["crush"])
+    hist = _history(samples, recording.count, p, n_x)
+    max_deflection = jnp.maximum(jnp.max(hist.displacement[-1]), w_final)
+    return ObliqueImpact(
+        t_star=first.t,
+        t_final=t_final,
+        s1_final=end.s1,
+        s2_final=end.s2,
+        w_final=w_final,
+        max_deflection=max_deflection,
+        damage=damage,
+        exit_normal_speed=exit_normal,
+        exit_tangential_speed=exit_tangential,
+        exit_angle_deg=jnp.degrees(jnp.arctan2(-exit_normal, exit_tangential)),
+        separated=separated.astype(t_final.dtype),
+        crush_work=phi * damage,
+        backing_work=end.backing_work,
+        hinge_work=end.hinge_work,
+        friction_work=end.friction_work,
+        slope_work=end.slope_work,
+        history=hist if history else None,
+    )
+
+
+# --------------------------------------------------------------------------------------
+# Public functions.
+
+_N_X = 129
+
+
+def _check_options(rtol, max_steps):
+    if not 0.0 < rtol < 1.0:
+        raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
+    if int(max_steps) != max_steps or max_steps < 16:
+        raise ValueError(f"max_steps must be an integer >= 16; got {max_steps!r}")
+
+
+def oblique_impact(
+    mass_ratio,
+    force_ratio,
+    normal_speed,
+    tangential_speed,
+    *,
+    friction=0.0,
+    rtol: float = 1e-8,
+    history: bool = False,
+    max_steps: int = 1024,
+) -> ObliqueImpact:
+    """Oblique impact (report 3.3) in the report's dimensionless variables.
+
+    **Arguments:**
+
+    - `mass_ratio`: mu = M / (m L), positive.
+    - `force_ratio`: phi = P0 / P_b, above 1 (at or below 1 the barrier never yields).
+    - `normal_speed`, `tangential_speed`: the vehicle's impact velocity components over
+      L / t0; the normal one positive, the tangential one non-negative (zero is the
+      normal impact of 3.2).
+    - `friction`: Coulomb coefficient between vehicle and barrier, non-negative.
+    - `rtol`: relative tolerance of the step loop (absolute: 1e-3 rtol).
+    - `history`: also return the recorded steps and the displacement field.
+    - `max_steps`: step budget per phase (also the size of the recorded history).
+
+    Differentiable with respect to every argument (forward-mode sensitivities, whichever
+    way JAX differentiates); scalars, or arrays of one shape solved under `vmap`.
+    """
+    _check_options(rtol, max_steps)
+    mu = _checks.positive("mass_ratio", mass_ratio)
+    phi = _checks.check("force_ratio", force_ratio, lambda x: (x > 1.0) & (x < jnp.inf), "above 1 and finite")
+    vn = _checks.positive("normal_speed", normal_speed)
+    vh = _checks.non_negative("tangential_speed", tangential_speed)
+    friction = _checks.non_negative("friction", friction)
+    args = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
+    options = dict(rtol=float(rtol), max_steps=int(max_steps), history=bool(history), n_x=_N_X)
+    return _oblique_batched(*args, **options)
+
+
+@functools.partial(jax.jit, static_argnames=("rtol", "max_steps", "history", "n_x"))
+def _oblique_batched(mu, phi, vn, vh, friction, **options):
+    solve = forward_jacobian_jvp(functools.partial(_oblique, **options))
+    for _ in range(mu.ndim):
+        solve = jax.vmap(solve)
+    return solve(mu, phi, vn, vh, friction)
+
+
+def moving_load(force_ratio, tangential_speed, t_end, *, rtol: float = 1e-8, max_steps: int = 1024) -> MovingLoad:
+    """A constant force moving along the beam at constant speed: the accelerative-phase
+    equations (3.3.16) alone, from S1 = S2 = S*, V0 = 0 to T = `t_end`. Its steady state
+    is (3.3.18)-(3.3.19): S1 = phi - sqrt(phi^2 - 1), S2 = phi + sqrt(phi^2 - 1),
+    V0 = sqrt(phi^2 - 1) / V_H."""
+    _check_options(rtol, max_steps)
+    phi = _checks.check("force_ratio", force_ratio, lambda x: (x > 1.0) & (x < jnp.inf), "above 1 and finite")
+    vh = _checks.positive("tangential_speed", tangential_speed)
+    t_end = _checks.positive("t_end", t_end)
+    return _moving_load(*jnp.broadcast_arrays(phi, vh, t_end), rtol=float(rtol), max_steps=int(max_steps))
+
+
+@functools.partial(jax.jit, static_argnames=("rtol", "max_steps"))
+def _moving_load(phi, vh, t_end, *, rtol, max_steps):
+    def solve(phi, vh, t_end):
+        one = jnp.ones_like(phi)
+        p, first, _, _ = _solve(one, phi, one, vh, 0.0 * one, rtol=rtol, max_steps=max_steps, t_end=t_end)
+        recording = first.recording
+        samples = _padded(recording.samples, recording.count)
+        return MovingLoad(s1=first.y.s1, s2=first.y.s2, v0=first.y.v0, history=_history(samples, recording.count, p, _N_X))
+
+    solve = forward_jacobian_jvp(solve)
+    for _ in range(phi.ndim):
+        solve = jax.vmap(solve)
+    return solve(phi, vh, t_end)
