@@ -1,0 +1,111 @@
+"""barrierjax.hinge.oblique_impact and moving_load (report 3.3)."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from barrierjax.hinge import normal_impact
+from barrierjax.hinge.oblique import moving_load, oblique_impact
+
+# Light and moderate vehicles (mu <= 5); see the module's notes on heavy ones.
+NORMAL_CASES = [(5.0, 2.0, 0.6), (0.05, 20.0, 0.2), (1.0, 1.5, 0.7)]
+OBLIQUE_CASES = [
+    (5.0, 2.0, 0.6 * math.sin(math.radians(a)), 0.6 * math.cos(math.radians(a))) for a in (15.0, 30.0, 45.0)
+] + [(5.0, 2.0, 0.4, 0.23), (0.2, 3.0, 0.5, 0.5)]
+
+
+@pytest.fixture(scope="module")
+def oblique_batch():
+    mu, phi, vn, vh = (jnp.array(c) for c in zip(*OBLIQUE_CASES))
+    return oblique_impact(mu, phi, vn, vh, rtol=1e-9, history=True)
+
+
+@pytest.mark.parametrize("phi, vh", [(2.0, 1.0), (3.0, 0.5)])
+def test_moving_load_reaches_steady_state(phi, vh):
+    root = math.sqrt(phi**2 - 1.0)
+    r = moving_load(phi, vh, 60.0 / vh, rtol=1e-10)
+    assert float(r.s1) == pytest.approx(phi - root, rel=1e-6)
+    assert float(r.s2) == pytest.approx(phi + root, rel=1e-6)
+    assert float(r.v0) == pytest.approx(root / vh, rel=1e-6)
+
+
+@pytest.mark.parametrize("mu, phi, v0", NORMAL_CASES)
+def test_no_tangential_speed_is_normal_impact(mu, phi, v0):
+    r = oblique_impact(mu, phi, v0, 0.0, rtol=1e-10)
+    n = normal_impact(mu, phi, v0, rtol=1e-12)
+    for field in ("t_star", "t_final", "w_final", "damage"):
+        assert float(getattr(r, field)) == pytest.approx(float(getattr(n, field)), rel=1e-7), field
+    assert float(r.s1_final) == pytest.approx(float(n.s_final), rel=1e-7)
+    assert float(r.s2_final) == pytest.approx(float(n.s_final), rel=1e-7)
+
+
+def test_hinges_meet_at_rest_and_vehicle_leaves(oblique_batch):
+    r = oblique_batch
+    np.testing.assert_allclose(r.s1_final, r.s2_final, rtol=1e-6)
+    assert np.all(np.asarray(r.exit_normal_speed) < 0.0)  # (3.3.3): theta V_H with theta < 0
+    assert np.all(np.asarray(r.exit_angle_deg) > 0.0)
+    assert np.all(np.asarray(r.max_deflection) >= np.asarray(r.w_final))
+
+
+def test_energy_balance_at_every_saved_step(oblique_batch):
+    r = oblique_batch
+    h = r.history
+    mu = jnp.array([c[0] for c in OBLIQUE_CASES])[:, None]
+    phi = jnp.array([c[1] for c in OBLIQUE_CASES])[:, None]
+    initial = h.vehicle_kinetic_energy[:, :1]
+    spent = (
+        h.vehicle_kinetic_energy
+        + phi * h.crush
+        + h.friction_work
+        + h.slope_work
+        + h.backing_work
+        + h.hinge_work
+        + h.beam_kinetic_energy
+    )
+    assert mu.shape == phi.shape
+    np.testing.assert_allclose(spent, jnp.broadcast_to(initial, spent.shape), rtol=1e-6)
+
+
+def test_vmap_equals_loop(oblique_batch):
+    for i, case in enumerate(OBLIQUE_CASES[:2]):
+        single = oblique_impact(*case, rtol=1e-9)
+        for field in ("damage", "w_final", "t_final", "exit_angle_deg", "exit_normal_speed"):
+            assert float(getattr(oblique_batch, field)[i]) == pytest.approx(
+                float(getattr(single, field)), rel=1e-12, abs=1e-14
+            )
+
+
+def test_gradients_match_finite_differences():
+    x = jnp.array([5.0, 2.0, 0.3, 0.52, 0.1])
+    fields = ("exit_angle_deg", "exit_tangential_speed", "damage", "w_final")
+
+    def outputs(x):
+        r = oblique_impact(x[0], x[1], x[2], x[3], friction=x[4], rtol=1e-11)
+        return jnp.stack([getattr(r, f) for f in fields])
+
+    jacobian = jax.jacrev(outputs)(x)
+    for i in range(5):
+        h = 1e-5 * x[i]
+        fd = (outputs(x.at[i].add(h)) - outputs(x.at[i].add(-h))) / (2 * h)
+        scale = jnp.maximum(jnp.abs(fd), 1e-6 * jnp.max(jnp.abs(jacobian), axis=1))
+        assert float(jnp.max(jnp.abs(jacobian[:, i] - fd) / scale)) < 1e-4, (fields, i)
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        (dict(mass_ratio=-1.0), "mass_ratio"),
+        (dict(force_ratio=0.9), "force_ratio"),
+        (dict(normal_speed=float("nan")), "normal_speed"),
+        (dict(tangential_speed=-0.1), "tangential_speed"),
+        (dict(friction=-0.2), "friction"),
+    ],
+)
+def test_bad_input_names_the_field(kwargs, field):
+    args = dict(mass_ratio=5.0, force_ratio=2.0, normal_speed=0.3, tangential_speed=0.5) | kwargs
+    friction = args.pop("friction", 0.0)
+    with pytest.raises(ValueError, match=field):
+        oblique_impact(**args, friction=friction)
