@@ -59,14 +59,6 @@ def _capacity(samples):
     return jax.tree.leaves(samples)[0].shape[0]
 
 
-def empty_recording(sample, capacity: int, fill) -> Recording:
-    """A buffer shaped like `sample`, every leaf filled with `fill(leaf)`."""
-    return Recording(
-        jax.tree.map(lambda x: jnp.full((capacity,), fill(x), jnp.result_type(x)), sample),
-        jnp.zeros((), jnp.int32),
-    )
-
-
 def _combine(y, h, weights, ks):
     return jax.tree.map(
         lambda y0, *k: y0 + h * sum(w * ki for w, ki in zip(weights, k) if w != 0.0), y, *ks
@@ -131,21 +123,25 @@ def solve_recorded(
     ended_at_start = event(t0, y0, f0, args, recording) <= 0.0
 
     def cond(carry):
-        t, y, f, h, rec, steps, crossed = carry
+        *_, steps, crossed = carry
         return ~crossed & (steps < max_steps)
 
     def body(carry):
         t, y, f, h, rec, steps, _ = carry
-        h = jnp.minimum(h, max_step(t, y, f, args, rec))
+        # Step lengths are a discretisation choice: no derivative flows through them.
+        h = jax.lax.stop_gradient(jnp.minimum(h, max_step(t, y, f, args, rec)))
         y1, error, f1 = _step(field, t, y, f, h, args, rec)
         ratio = _error_ratio(y, y1, error, rtol, atol)
         finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(y1)]))
         accept = (ratio <= 1.0) & finite
         crossed = accept & (event(t + h, y1, f1, args, rec) <= 0.0)
         advance = accept & ~crossed
-        new_rec = jax.lax.cond(advance, lambda r: r.append(record(t + h, y1, f1, args)), lambda r: r, rec)
+        new_rec = jax.lax.cond(
+            advance, lambda r: r.append(record(t + h, y1, f1, args)), lambda r: r, rec
+        )
         keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(advance, a, b), new, old)
-        factor = jnp.where(finite, jnp.clip(0.9 * ratio ** -0.2, 0.2, 5.0), 0.2)
+        ratio = jax.lax.stop_gradient(ratio)
+        factor = jnp.where(finite, jnp.clip(0.9 * ratio**-0.2, 0.2, 5.0), 0.2)
         h_next = jnp.where(crossed, h, h * factor)
         return (
             jnp.where(advance, t + h, t),
@@ -157,12 +153,19 @@ def solve_recorded(
             crossed,
         )
 
-    start = (t0, y0, f0, jnp.asarray(h0, dtype), recording, jnp.zeros((), jnp.int32), ended_at_start)
+    start = (
+        t0,
+        y0,
+        f0,
+        jnp.asarray(h0, dtype),
+        recording,
+        jnp.zeros((), jnp.int32),
+        ended_at_start,
+    )
     t, y, f, h, recording, steps, crossed = jax.lax.while_loop(cond, body, start)
     t = eqx.error_if(t, ~crossed, "step loop reached max_steps before the phase ended")
 
-    # The crossing lies within (t, t + h]: Illinois regula falsi on the step length keeps
-    # the bracket, and its last secant carries the event's implicit derivative.
+    # The crossing lies within (t, t + h]: Illinois regula falsi on the step length.
     def event_after(length):
         y1, _, f1 = _step(field, t, y, f, length, args, recording)
         return event(t + length, y1, f1, args, recording)
@@ -181,6 +184,13 @@ def solve_recorded(
     (_, _, length, _), _ = jax.lax.scan(
         illinois, (jnp.zeros_like(h), e_start, h, event_after(h)), None, length=secant_iterations
     )
+    # Differentiating the iterations would divide by e_hi - e_lo -> 0: take the derivative
+    # by the implicit function theorem instead, with one Newton correction whose slope is
+    # held constant (its primal change is at rounding level).
+    length = jax.lax.stop_gradient(length)
+    value, slope = jax.jvp(event_after, (length,), (jnp.ones_like(length),))
+    slope = jax.lax.stop_gradient(slope)
+    length = length - value / jnp.where(slope != 0.0, slope, 1.0)
     length = jnp.where(ended_at_start, 0.0, length)
     y_end, _, f_end = _step(field, t, y, f, length, args, recording)
     recording = recording.append(record(t + length, y_end, f_end, args))
