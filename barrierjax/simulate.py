@@ -16,6 +16,7 @@ from jaxtyping import Array, Float
 
 from ._custom_types import Batchable
 from .hinge.normal import NormalImpact, normal_impact
+from .hinge.oblique import ObliqueImpact, oblique_impact
 from .scene import Dimensionless, Scene, dimensionless
 
 
@@ -45,6 +46,12 @@ class Result(eqx.Module):
     - `hinge_extent`: distance from the impact point to the travelling hinges at rest;
     - `kinetic_energy`, `crush_work`, `backing_work`, `hinge_work`: the vehicle's
       initial kinetic energy and where it went;
+    - `friction_work`, `slope_work`: oblique impacts only (zero otherwise): the work of
+      friction, and that of the normal force through the barrier's slope under the
+      vehicle (see `barrierjax.hinge.oblique`); the vehicle keeps the rest;
+    - `exit_speed`, `exit_angle_deg`: the vehicle's speed when it leaves the barrier and
+      the angle of its velocity to the barrier (positive: away from it); zero for a
+      normal impact, where the vehicle comes to rest with the barrier;
     - `groups`: the scene's dimensionless groups and scales;
     - `model`: the dimensionless model result;
     - `history`: a `History`, or None when `n_history=0`.
@@ -60,26 +67,42 @@ class Result(eqx.Module):
     crush_work: Batchable
     backing_work: Batchable
     hinge_work: Batchable
+    friction_work: Batchable
+    slope_work: Batchable
+    exit_speed: Batchable
+    exit_angle_deg: Batchable
     groups: Dimensionless
-    model: NormalImpact
+    model: NormalImpact | ObliqueImpact
     history: History | None
 
 
-def _require_normal_impact(scene: Scene) -> Scene:
+def _is_normal(scene: Scene, oblique: bool | None) -> bool:
+    """Static dispatch. With `oblique=None`, a concrete angle below 90 degrees takes the
+    oblique model; a traced angle (under `jit` or `vmap`) takes the normal one and must
+    be 90 degrees at run time, so that a normal sweep never pays for the oblique model.
+    `oblique=True` forces the oblique model (which also covers 90 degrees)."""
     if scene.barrier.axial_capacity is not None:
         raise NotImplementedError(
             "Barrier.axial_capacity is set, but the axial-force model (report 3.4) is not "
             "implemented yet; leave axial_capacity=None"
         )
+    if oblique is not None:
+        return not oblique
+    angle = scene.impact.angle_deg
+    return isinstance(angle, Tracer) or bool(np.all(np.asarray(angle) == 90.0))
+
+
+def _require_normal_angle(scene: Scene) -> Scene:
     message = (
-        "Impact.angle_deg < 90: the oblique-impact model (report 3.3) is not "
-        "implemented yet; use angle_deg=90"
+        "Impact.angle_deg must be 90 for the normal-impact model; under jit or vmap pass "
+        "simulate(..., oblique=True) to sweep oblique angles"
     )
     angle = scene.impact.angle_deg
     if isinstance(angle, Tracer):
-        return eqx.tree_at(lambda s: s.impact.angle_deg, scene, eqx.error_if(angle, angle != 90.0, message))
+        checked = eqx.error_if(angle, jnp.any(angle != 90.0), message)
+        return eqx.tree_at(lambda s: s.impact.angle_deg, scene, checked)
     if not np.all(np.asarray(angle) == 90.0):
-        raise NotImplementedError(message)
+        raise ValueError(message)
     return scene
 
 
@@ -106,16 +129,25 @@ def simulate(
     rtol: float = 1e-8,
     n_history: int = 200,
     n_shape: int = 81,
+    oblique: bool | None = None,
 ) -> Result:
     """The response of `scene` in its own units; `n_history=0` skips the histories.
 
-    Normal impact (angle 90 degrees, no axial capacity): report 3.2 by
-    `barrierjax.hinge.normal_impact` with `method` and `rtol`. Friction plays no part in
-    a normal impact (nothing slides). Other scenes raise `NotImplementedError` until
-    their models land (inside `jit`, an oblique angle fails at run time).
+    - Normal impact (angle 90 degrees, no axial capacity): report 3.2 by
+      `barrierjax.hinge.normal_impact` with `method` and `rtol`. Friction plays no part
+      in a normal impact (nothing slides).
+    - Oblique impact (a concrete angle below 90 degrees, or `oblique=True`, which a
+      `vmap` over angles needs): report 3.3 by `barrierjax.hinge.oblique_impact` with
+      `rtol` (`method` does not apply; see that module for its current limits).
+    - An axial capacity raises `NotImplementedError` until report 3.4 lands.
     """
-    scene = _require_normal_impact(scene)
-    groups = dimensionless(scene)
+    if _is_normal(scene, oblique):
+        scene = _require_normal_angle(scene)
+        return _normal(scene, dimensionless(scene), method, rtol, n_history, n_shape)
+    return _oblique(scene, dimensionless(scene), rtol, n_history)
+
+
+def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
     s = groups.scales
     model = normal_impact(
         groups.mass_ratio,
@@ -143,6 +175,7 @@ def simulate(
             x=x * s.length,
             deflected_shape=shape * s.length,
         )
+    zero = jnp.zeros_like(model.damage)
     return Result(
         damage=model.damage * s.length,
         max_deflection=model.w_final * s.length,
@@ -154,6 +187,60 @@ def simulate(
         crush_work=model.crush_work * s.energy,
         backing_work=model.backing_work * s.energy,
         hinge_work=model.hinge_work * s.energy,
+        friction_work=zero,
+        slope_work=zero,
+        exit_speed=zero,
+        exit_angle_deg=zero,
+        groups=groups,
+        model=model,
+        history=history,
+    )
+
+
+def _oblique(scene, groups, rtol, n_history) -> Result:
+    """Report 3.3 by `barrierjax.hinge.oblique_impact`. Its histories are the solver's
+    steps (padded with the final state); `hinge_position` is the distance to the hinge
+    ahead of the vehicle, and `x` runs along the barrier from the impact point."""
+    s = groups.scales
+    model = oblique_impact(
+        groups.mass_ratio,
+        groups.force_ratio,
+        groups.normal_speed,
+        groups.tangential_speed,
+        friction=groups.friction,
+        rtol=rtol,
+        history=bool(n_history),
+        max_steps=4096,
+    )
+    vehicle = scene.vehicle
+    history = None
+    if n_history:
+        h = model.history
+        history = History(
+            time=h.time * s.time,
+            vehicle_velocity=h.vehicle_normal_velocity * s.velocity,
+            barrier_velocity=h.v0 * s.velocity,
+            contact_force=h.contact_force * s.force,
+            hinge_position=h.s1 * s.length,
+            displacement=h.contact_displacement * s.length,
+            x=h.x * s.length,
+            deflected_shape=h.displacement * s.length,
+        )
+    return Result(
+        damage=model.damage * s.length,
+        max_deflection=model.max_deflection * s.length,
+        duration=model.t_final * s.time,
+        peak_force=vehicle.crush_force,
+        peak_deceleration=vehicle.crush_force / vehicle.mass,
+        hinge_extent=jnp.maximum(model.s1_final, model.s2_final) * s.length,
+        kinetic_energy=0.5 * vehicle.mass * scene.impact.speed**2,
+        crush_work=model.crush_work * s.energy,
+        backing_work=model.backing_work * s.energy,
+        hinge_work=model.hinge_work * s.energy,
+        friction_work=model.friction_work * s.energy,
+        slope_work=model.slope_work * s.energy,
+        exit_speed=jnp.hypot(model.exit_normal_speed, model.exit_tangential_speed) * s.velocity,
+        exit_angle_deg=model.exit_angle_deg,
         groups=groups,
         model=model,
         history=history,

@@ -18,8 +18,15 @@ from barrierjax import cli
 from barrierjax.scene_file import default_scene
 
 G = 9.80665
-REQUIRED = ("damage_m", "max_deflection_m", "duration_s", "peak_deceleration_g")
-POSITIVE = REQUIRED + (
+REQUIRED = (
+    "damage_m",
+    "max_deflection_m",
+    "duration_s",
+    "peak_deceleration_g",
+    "exit_speed_m_s",  # zero for the default (normal) scene
+    "exit_angle_deg",
+)
+POSITIVE = REQUIRED[:4] + (
     "peak_force_N",
     "peak_deceleration_m_s2",
     "hinge_extent_m",
@@ -141,7 +148,6 @@ BAD = [
     ("[vehicle]", "[lorry]", "[lorry]"),
     ('speed = "35 mph"', 'speed = "35 mph"\n[extra]\nx = 1', "[extra]"),
     # Valid files for models not implemented yet: one line naming the key, status 2.
-    ('speed = "35 mph"', 'speed = "35 mph"\nangle = "25 deg"', "[impact] angle"),
     ('plastic_moment = "1e6 lbf*in"', 'plastic_moment = "1e6 lbf*in"\naxial_capacity = "1 MN"',
      "[barrier] axial_capacity"),
 ]

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import barrierjax as bj
+from barrierjax.hinge import oblique_impact
 
 INCH, LBF = 0.0254, 4.4482216152605  # m, N
 POUND_MASS = LBF / INCH  # kg in one lbf s^2/in (175.127 kg)
@@ -98,18 +99,37 @@ def test_gradient_with_respect_to_every_scene_leaf(method):
 
 
 def test_unimplemented_physics_is_refused_not_ignored():
-    oblique = eqx.tree_at(lambda s: s.impact, si_scene(), bj.Impact(10.0, angle_deg=25.0))
-    with pytest.raises(NotImplementedError, match="angle_deg"):
-        bj.simulate(oblique)
     axial = eqx.tree_at(lambda s: s.barrier, si_scene(), bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6))
     with pytest.raises(NotImplementedError, match="axial_capacity"):
         bj.simulate(axial)
 
 
-def test_traced_oblique_angle_fails_at_run_time():
-    run = jax.jit(lambda angle: bj.simulate(
-        bj.Scene(si_scene().barrier, si_scene().vehicle, bj.Impact(10.0, angle_deg=angle)), n_history=0
-    ).damage)
-    assert np.isfinite(float(run(90.0)))
-    with pytest.raises(Exception, match="angle_deg"):
-        float(run(30.0))
+def test_oblique_scene_runs_the_oblique_model():
+    scene = eqx.tree_at(lambda s: s.impact, si_scene(), bj.Impact(10.0, angle_deg=25.0))
+    result = bj.simulate(scene, n_history=0, rtol=1e-6)
+    g = bj.dimensionless(scene)
+    direct = oblique_impact(g.mass_ratio, g.force_ratio, g.normal_speed, g.tangential_speed, rtol=1e-6)
+    assert float(result.damage) == pytest.approx(float(direct.damage * g.scales.length), rel=1e-12)
+    assert float(result.exit_angle_deg) == pytest.approx(float(direct.exit_angle_deg), rel=1e-12)
+    assert 0.0 < float(result.exit_speed) < 10.0
+    # Where the vehicle's kinetic energy went, the exit kinetic energy included.
+    spent = (
+        result.crush_work + result.backing_work + result.hinge_work + result.friction_work
+        + result.slope_work + 0.5 * scene.vehicle.mass * result.exit_speed**2
+    )
+    assert float(spent) == pytest.approx(float(result.kinetic_energy), rel=1e-6)
+
+
+def test_traced_angle_dispatch():
+    def run(angle, **options):
+        scene = bj.Scene(si_scene().barrier, si_scene().vehicle, bj.Impact(10.0, angle_deg=angle))
+        return bj.simulate(scene, n_history=0, rtol=1e-9, **options).damage
+
+    normal = jax.jit(run)
+    assert float(normal(90.0)) == pytest.approx(float(run(90.0)), rel=1e-12)
+    with pytest.raises(Exception, match="oblique=True"):
+        float(normal(30.0))
+    oblique = jax.jit(lambda a: run(a, oblique=True))
+    assert float(oblique(90.0)) == pytest.approx(float(run(90.0)), rel=1e-7)
+    assert float(oblique(30.0)) == pytest.approx(float(run(30.0)), rel=1e-9)
+
