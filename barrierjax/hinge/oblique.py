@@ -554,7 +554,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
         before_jump.recording,
         lambda s, y, f, p, r: jnp.where(at_jump, contact_event(s, y, f, p, r), -1.0),
     )
-    force_end, _ = _contact_force(second.y, p, second.recording)
+    force_end, theta_end = _contact_force(second.y, p, second.recording)
     separated = force_end / phi < second.y.log_v0 - log_rest
     # The free phase runs only after a separation; otherwise its event is negative at its
     # start and it takes no step.
@@ -562,7 +562,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
     vehicle_exit = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
     free_start = eqx.tree_at(lambda s: s.vehicle_normal, second.y, vehicle_exit)
     third = sliding(False, free_start, second.recording, lambda s, y, f, p, r: y.log_v0 - free_rest)
-    return p, first, second, (third, separated)
+    return p, first, second, (third, separated, theta_end)
 
 
 def _rest(end, in_contact):
@@ -630,7 +630,7 @@ def _history(samples, count, p: _Params, n_x):
 
 
 def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
-    p, first, second, (third, separated) = _solve(
+    p, first, second, (third, separated, theta_end) = _solve(
         mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps
     )
     damage = first.y.crush
@@ -641,7 +641,6 @@ def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
     w_final = end.contact_displacement + jnp.where(separated, free_extra, contact_extra)
     # At separation the vehicle keeps the load point's velocity; at rest in contact it is
     # (3.3.3) with V0 = 0: theta V_H.
-    _, theta_end = _contact_force(second.y, p, second.recording)
     at_separation = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
     exit_normal = jnp.where(separated, at_separation, theta_end * second.y.vehicle_tangential)
     exit_tangential = second.y.vehicle_tangential
