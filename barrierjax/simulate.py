@@ -16,15 +16,31 @@ from jaxtyping import Array, Float
 
 from ._custom_types import Batchable
 from .hinge.normal import NormalImpact, normal_impact
-from .hinge.oblique import ObliqueImpact, oblique_impact
+from .hinge.oblique import ObliqueImpact, ObliqueImpactHistory, oblique_impact
 from .scene import Dimensionless, Scene, dimensionless
 
 
 class History(eqx.Module):
     """Time histories in the scene's units (one sample per row of `time`).
 
-    `deflected_shape[k, j]` is the barrier's displacement at `time[k]` and distance `x[j]`
-    from the impact point (the shape is symmetric about it)."""
+    - `vehicle_velocity`: the vehicle's velocity normal to the barrier (towards it);
+      `barrier_velocity`: the barrier's under the contact point; `contact_force`;
+    - `hinge_position`, `rear_hinge_position`: distance from the contact point to the
+      hinge ahead of the vehicle and to the one behind it (equal in a normal impact);
+    - `displacement`: the barrier's displacement under the contact point;
+    - `vehicle_position`, `vehicle_displacement`: the vehicle's path in plan, along the
+      barrier from the impact point and normal to it (towards the barrier) since contact,
+      the integral of its velocity: the barrier's displacement under it plus its crush
+      while in contact, a straight line at its exit velocity after it has left (see
+      `vehicle_path`); in a normal impact the position stays 0;
+    - `vehicle_tangential_velocity`: along the barrier (0 in a normal impact);
+    - `deflected_shape[k, j]`: the barrier's displacement at `time[k]` and `x[j]`. In a
+      normal impact `x` is the distance from the impact point (the shape is symmetric
+      about it); in an oblique one, the position along the barrier from the impact point,
+      in the vehicle's direction of travel.
+
+    The histories of an oblique impact are the solver's steps, padded with the final
+    state (`result.model.history.n_saved` of them are distinct)."""
 
     time: Float[Array, " n"]
     vehicle_velocity: Float[Array, " n"]
@@ -34,6 +50,10 @@ class History(eqx.Module):
     displacement: Float[Array, " n"]
     x: Float[Array, " nx"]
     deflected_shape: Float[Array, "n nx"]
+    rear_hinge_position: Float[Array, " n"]
+    vehicle_position: Float[Array, " n"]
+    vehicle_displacement: Float[Array, " n"]
+    vehicle_tangential_velocity: Float[Array, " n"]
 
 
 class Result(eqx.Module):
@@ -106,6 +126,33 @@ def _require_normal_angle(scene: Scene) -> Scene:
     return scene
 
 
+def vehicle_path(history: ObliqueImpactHistory):
+    """The vehicle's path in plan during an oblique impact, dimensionless: `(along,
+    normal)` at each sample of `history` (`oblique_impact(..., history=True).history`),
+    along the barrier from the impact point and normal to it (towards the barrier) from
+    the point of contact, for one scenario (`jax.vmap` it over a batch).
+
+    While in contact (crushing and contact phases) the vehicle is at the contact point
+    F(T), and its body has moved W(F(T), T) + D(T) towards the barrier, the barrier's
+    displacement under it plus its crush: the integral of its normal velocity (3.3.3).
+    From the first sample of the free phase on (where the contact force is zero: after a
+    separation, or the final state at rest) it moves on in a straight line at its exit
+    velocity."""
+    h = history
+    n = h.time.shape[-1]
+    free = h.contact_force == 0.0
+    first = jnp.where(jnp.any(free), jnp.argmax(free), n)
+    k = jnp.minimum(first, n - 1)
+    in_contact = jnp.arange(n) < first
+    elapsed = h.time - h.time[k]
+    along = h.contact_position
+    normal = h.contact_displacement + h.crush
+    return (
+        jnp.where(in_contact, along, along[k] + h.vehicle_tangential_velocity * elapsed),
+        jnp.where(in_contact, normal, normal[k] + h.vehicle_normal_velocity * elapsed),
+    )
+
+
 def deflected_shape(x, hinge, displacement, hinge_work):
     """W(X, T) on the grid `x` from the histories of S, W and the hinge work (all
     dimensionless), for the velocity field V (1 - |X|/S) of (3.2.1).
@@ -174,6 +221,10 @@ def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
             displacement=h.displacement * s.length,
             x=x * s.length,
             deflected_shape=shape * s.length,
+            rear_hinge_position=h.hinge * s.length,
+            vehicle_position=jnp.zeros_like(h.time),
+            vehicle_displacement=(h.displacement + h.crush) * s.length,
+            vehicle_tangential_velocity=jnp.zeros_like(h.time),
         )
     zero = jnp.zeros_like(model.damage)
     return Result(
@@ -200,7 +251,8 @@ def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
 def _oblique(scene, groups, rtol, n_history) -> Result:
     """Report 3.3 by `barrierjax.hinge.oblique_impact`. Its histories are the solver's
     steps (padded with the final state); `hinge_position` is the distance to the hinge
-    ahead of the vehicle, and `x` runs along the barrier from the impact point."""
+    ahead of the vehicle, `rear_hinge_position` to the one behind it, and `x` runs along
+    the barrier from the impact point."""
     s = groups.scales
     model = oblique_impact(
         groups.mass_ratio,
@@ -216,6 +268,7 @@ def _oblique(scene, groups, rtol, n_history) -> Result:
     history = None
     if n_history:
         h = model.history
+        along, normal = vehicle_path(h)
         history = History(
             time=h.time * s.time,
             vehicle_velocity=h.vehicle_normal_velocity * s.velocity,
@@ -225,6 +278,10 @@ def _oblique(scene, groups, rtol, n_history) -> Result:
             displacement=h.contact_displacement * s.length,
             x=h.x * s.length,
             deflected_shape=h.displacement * s.length,
+            rear_hinge_position=h.s2 * s.length,
+            vehicle_position=along * s.length,
+            vehicle_displacement=normal * s.length,
+            vehicle_tangential_velocity=h.vehicle_tangential_velocity * s.velocity,
         )
     return Result(
         damage=model.damage * s.length,
