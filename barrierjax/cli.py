@@ -228,14 +228,13 @@ def _run(args) -> int:
     if bad:
         raise CommandError(f"the solution is not finite ({', '.join(bad)})", EXIT_FAILED)
     plots = []
-    oblique = data["inputs"]["angle_deg"] != 90.0
-    if oblique and not args.no_plots:
-        _progress("plots of oblique impacts are not drawn yet (issue 3); results only")
-    if not args.no_plots and not oblique:
+    if not args.no_plots:
+        inputs = data["inputs"]
+        angle = "" if inputs["angle_deg"] == 90.0 else f" at {inputs['angle_deg']:g} deg"
         title = (
             f"{Path(name).stem if args.scene else 'default scene'}: "
-            f"{data['inputs']['vehicle_mass_kg']:.0f} kg at "
-            f"{data['inputs']['speed_m_s'] * 3.6:.1f} km/h "
+            f"{inputs['vehicle_mass_kg']:.0f} kg at {inputs['speed_m_s'] * 3.6:.1f} km/h"
+            f"{angle} "
             rf"($\mu$ = {data['mass_ratio']:.3g}, $\phi$ = {data['force_ratio']:.3g})"
         )
         plots = plotting.write_run_plots(
@@ -356,8 +355,8 @@ def build_parser() -> argparse.ArgumentParser:
     figures = commands.add_parser(
         "figures",
         help="write the report's figures as PNG files",
-        description="Reproduce the report's figures (section 3.2 so far) as PNG files "
-        "named by figure number (fig_3_2_2.png, ...), printing each path written.",
+        description="Reproduce the report's figures (sections 3.2 and 3.3 so far) as PNG "
+        "files named by figure number (fig_3_2_2.png, ...), printing each path written.",
     )
     figures.add_argument(
         "--out", type=Path, default=Path("barrierjax-figures"), metavar="DIR",
