@@ -100,12 +100,9 @@ def test_gradients_match_finite_differences_before_the_memory_is_read():
     _jacobian_against_finite_differences(jnp.array([5.0, 2.0, 0.3, 0.2, 0.1]), 1e-5)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect: once the load reads the recorded hinge trace the derivatives of "
-    "the contact phase are 5-15 % off (the primal converges); see oblique.py",
-)
 def test_gradients_match_finite_differences_reading_the_memory():
+    # The load crosses S* and H(T*), where the deposited curvature has a kink and a jump,
+    # and the jump propagates (oblique._contact_segments).
     _jacobian_against_finite_differences(jnp.array([5.0, 2.0, 0.3, 0.52, 0.1]), 1e-4)
 
 

@@ -74,10 +74,11 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from jaxtyping import Array, Float, Int
 
 from .. import _checks
 from .._custom_types import Scalar
-from .._solve.recorded_rk import Recording, solve_recorded
+from .._solve.recorded_rk import PhaseEnd, Recording, solve_recorded
 from .._solve.sensitivity import forward_jacobian_jvp
 
 # --------------------------------------------------------------------------------------
@@ -167,14 +168,20 @@ def _beam_kinetic_energy(v0, s1, s2):
     return v0**2 * (s1 + s2) / 6.0
 
 
-def _slope_memory(recording: Recording, x):
+def _slope_memory(recording: Recording, x, segment):
     """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by cubic Hermite
-    interpolation of the recorded (H, Phi, dPhi/dH); zero ahead of the initial hinge."""
+    interpolation of the recorded (H, Phi, dPhi/dH); zero ahead of the initial hinge.
+
+    `segment = (first, last)` bounds the recorded interval used, so that a lookup at a
+    jump of Psi' (recorded twice, left and right limits) takes the side the load is on
+    whatever the rounding of x."""
     h = recording.samples["hinge"]
     phi = recording.samples["rotation"]
     slope = recording.samples["curvature"]
-    last = recording.count - 1
-    i = jnp.clip(jnp.searchsorted(h, x, side="right").astype(last.dtype) - 1, 0, h.shape[0] - 2)
+    first, last = segment
+    last = jnp.minimum(last, recording.count - 1)
+    i = jnp.searchsorted(h, x, side="right").astype(last.dtype) - 1
+    i = jnp.clip(i, first, jnp.maximum(last - 1, first))
     interior = i + 1 <= last
     j = jnp.where(interior, i + 1, i)
     width = jnp.where(interior, h[j] - h[i], 1.0)
@@ -209,6 +216,7 @@ class _Params(eqx.Module):
     phi: Scalar
     friction: Scalar
     s_star: Scalar
+    segment: tuple  # (first, last) recorded samples the memory may read: `_slope_memory`
     moving_load: bool = eqx.field(static=True, default=False)
 
 
@@ -257,7 +265,7 @@ def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
     safe_v0 = jnp.where(moving, y.v0, 1.0)
     # At V0 = 0 (T = 0 only) the 0/0 limit: the antisymmetric mode of the linearisation.
     start = -1.5 * dv0 * vh / (dv0 + 0.5 + p.phi / p.s_star)
-    psi, _ = _slope_memory(recording, y.position)
+    psi, _ = _slope_memory(recording, y.position, p.segment)
     theta = psi - y.rotation
     contact_velocity = y.v0 + theta * vh
     backing, hinge = _beam_powers(y.v0, y.s1, y.s2)
@@ -283,7 +291,7 @@ def _contact_force(y: _Sliding, p: _Params, recording):
     """(force ratio, slope under the load): (3.3.20)-(3.3.22) solved for the force."""
     v0 = jnp.exp(y.log_v0)
     vh = y.vehicle_tangential
-    psi, curvature = _slope_memory(recording, y.position)
+    psi, curvature = _slope_memory(recording, y.position, p.segment)
     theta = psi - y.rotation
     s1, s2 = y.s1, y.s2
     numerator = (
@@ -436,6 +444,99 @@ def _lookup_bound(rate_of_position):
     return max_step
 
 
+class _Breakpoints(eqx.Module):
+    """Points of the right hinge's trace where Psi' jumps or has a kink, not yet reached
+    by the load, in the order the load meets them: `position` and the indices of the
+    recorded samples holding the left and right limits there. Two slots suffice (see
+    `_contact_segments`); an empty slot is at +inf."""
+
+    position: Float[Array, "2"]
+    left: Int[Array, "2"]
+    right: Int[Array, "2"]
+
+    def head(self):
+        return self.position[0], self.left[0], self.right[0]
+
+    def pop_and_push(self, position, left):
+        """Drop the head and append a breakpoint created now: ahead of every other, since
+        the hinge only advances."""
+        filled = jnp.isfinite(self.position[1])
+        pick = lambda old, new, empty: jnp.where(
+            filled, jnp.stack([old[1], new]), jnp.stack([new, empty])
+        )
+        return _Breakpoints(
+            pick(self.position, position, jnp.inf),
+            pick(self.left, left, 0),
+            pick(self.right, left + 1, 0),
+        )
+
+
+def _contact_segments(sliding, start, first, p: _Params, contact_event, max_steps):
+    """The contact phase, as segments between the breakpoints of the deposited curvature.
+
+    The force in contact reads Psi'(F), so its vector field jumps where Psi' jumps and has
+    a kink where Psi' has one. Psi' jumps where the right hinge stood at T* (the force
+    drops there, and with it S1'), and has a kink at S*, where the trace starts. When the
+    load reaches such a point the force jumps (or kinks), and so does the curvature the
+    right hinge deposits at that moment: a neutral delay equation propagates its
+    breakpoints, x_new = H(T_k) where F(T_k) = x_k. A new breakpoint lies ahead of every
+    pending one, so at most two are pending (S* and H(T*) at the start). Each segment
+    ends exactly on the next one, so that no step straddles it (a straddling step misses
+    the jump's contribution to the derivatives, O(1), or a kink's, O(step)), and reads
+    the trace only between its two breakpoints. The end of a segment and the start of the
+    next record the left and right limits at the new breakpoint. Returns the final
+    segment's end and its parameters.
+    """
+    recording = first.recording
+    int_ = recording.count.dtype
+    first_hinge = recording.samples["hinge"][0]  # S*, recorded at T = 0
+    # The last sample of the crushing phase is the left limit at H(T*).
+    at_t_star = (start.position + start.s1, recording.count - 1)
+    before_s_star = start.position < first_hinge
+    pending = _Breakpoints(
+        jnp.where(
+            before_s_star,
+            jnp.stack([first_hinge, at_t_star[0]]),
+            jnp.stack([at_t_star[0], jnp.inf]),
+        ),
+        jnp.where(before_s_star, jnp.stack([0, at_t_star[1]]), jnp.stack([at_t_star[1], 0])).astype(
+            int_
+        ),
+        jnp.where(
+            before_s_star, jnp.stack([0, at_t_star[1] + 1]), jnp.stack([at_t_star[1] + 1, 0])
+        ).astype(int_),
+    )
+
+    def segment(carry):
+        end, p, pending, behind, steps, _ = carry
+        position, left, right = pending.head()
+        p = eqx.tree_at(lambda p: p.segment, p, (behind, left))
+        event = lambda s, y, f, p, r: jnp.minimum(
+            contact_event(s, y, f, p, r), position - y.position
+        )
+        end = sliding(True, end.y, end.recording, p, event, max_steps - steps)
+        crossed = position - end.y.position < contact_event(
+            0.0, end.y, end.derivative, p, end.recording
+        )
+        created = pending.pop_and_push(end.y.position + end.y.s1, end.recording.count - 1)
+        keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(crossed, a, b), new, old)
+        return (
+            end,
+            p,
+            keep(created, pending),
+            jnp.where(crossed, right, behind),
+            steps + end.steps + 2,
+            crossed,
+        )
+
+    # (`derivative` is a placeholder of the right structure: no segment reads it.)
+    initial = PhaseEnd(first.t, start, start, recording, first.steps)
+    steps = jnp.zeros((), jnp.int32)
+    carry = (initial, p, pending, jnp.zeros((), int_), steps, jnp.asarray(True))
+    end, p, *_ = jax.lax.while_loop(lambda c: c[-1], segment, carry)
+    return end, p
+
+
 # In s, ln V0 falls at the rate |V0'|, steadily once the hinges have settled, where the
 # error estimate would let the step grow without bound: cap it at this many e-folds of V0.
 _EFOLDS_PER_STEP = 2.0
@@ -449,8 +550,10 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
     root = jnp.sqrt(phi**2 + 3.0)
     s_star = 3.0 / (root + phi)
     moving_load = t_end is not None
-    p = _Params(mu=mu, phi=phi, friction=friction, s_star=s_star, moving_load=moving_load)
-    recording = _empty_recording(3 * max_steps + 8, dtype)
+    capacity = 3 * max_steps + 8
+    everything = (jnp.zeros((), jnp.int32), jnp.asarray(capacity, jnp.int32))
+    p = _Params(mu, phi, friction, s_star, everything, moving_load=moving_load)
+    recording = _empty_recording(capacity, dtype)
     atol = 1e-3 * rtol
     acceleration = (phi - s_star) / s_star
     time_scale = t_end if moving_load else 1.0 / (acceleration + phi / mu)
@@ -514,7 +617,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
 
     lookup_bound = _lookup_bound(lambda y: jnp.exp(y.log_v0) * y.vehicle_tangential)
 
-    def sliding(in_contact, start, recording, event):
+    def sliding(in_contact, start, recording, p, event, budget):
         field = _sliding_field(in_contact)
         rate = field(zero, start, p, recording).log_v0
         return solve_recorded(
@@ -531,37 +634,25 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
             max_step=lambda s, y, f, p, r: jnp.minimum(
                 lookup_bound(s, y, f, p, r), _EFOLDS_PER_STEP / jnp.abs(f.log_v0)
             ),
-            max_steps=max_steps,
+            max_steps=budget,
         )
 
-    # The curvature the right hinge left behind jumps where it stood at T* (the force, and
-    # so S1', drops there); the load reaches that point during the contact phase, and the
-    # phase is split there so that no step straddles the jump (a straddling step would
-    # lose its contribution to the derivatives).
-    jump = y.position + y.s1
-    before_jump = sliding(
-        True,
-        contact,
-        first.recording,
-        lambda s, y, f, p, r: jnp.minimum(contact_event(s, y, f, p, r), jump - y.position),
-    )
-    at_jump = jump - before_jump.y.position < contact_event(
-        zero, before_jump.y, before_jump.derivative, p, before_jump.recording
-    )
-    second = sliding(
-        True,
-        before_jump.y,
-        before_jump.recording,
-        lambda s, y, f, p, r: jnp.where(at_jump, contact_event(s, y, f, p, r), -1.0),
-    )
-    force_end, theta_end = _contact_force(second.y, p, second.recording)
+    second, p_end = _contact_segments(sliding, contact, first, p, contact_event, max_steps)
+    force_end, theta_end = _contact_force(second.y, p_end, second.recording)
     separated = force_end / phi < second.y.log_v0 - log_rest
     # The free phase runs only after a separation; otherwise its event is negative at its
     # start and it takes no step.
     free_rest = jnp.where(separated, log_rest, second.y.log_v0 + 1.0)
     vehicle_exit = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
     free_start = eqx.tree_at(lambda s: s.vehicle_normal, second.y, vehicle_exit)
-    third = sliding(False, free_start, second.recording, lambda s, y, f, p, r: y.log_v0 - free_rest)
+    third = sliding(
+        False,
+        free_start,
+        second.recording,
+        p,
+        lambda s, y, f, p, r: y.log_v0 - free_rest,
+        max_steps,
+    )
     return p, first, second, (third, separated, theta_end)
 
 
