@@ -43,6 +43,10 @@ _B_ERROR = np.array(
 )
 
 
+# The event's root is bracketed to this fraction of the step before the Newton correction.
+_BRACKET_TOLERANCE = 1e-9
+
+
 class Recording(eqx.Module):
     """`samples` (leaves with a leading axis of `capacity`) of which the first `count` are
     filled; the rest repeat the last filled sample or hold the initial fill."""
@@ -50,9 +54,16 @@ class Recording(eqx.Module):
     samples: PyTree[Float[Array, " capacity"]]
     count: Int[Array, ""]
 
-    def append(self, sample):
-        samples = jax.tree.map(lambda buf, x: buf.at[self.count].set(x), self.samples, sample)
-        return Recording(samples, jnp.minimum(self.count + 1, _capacity(samples) - 1))
+    def append(self, sample, when=True):
+        """Record `sample` if `when`. The slot is written either way (with its own content
+        when not), so that under `vmap` a step costs one sample, not a copy of the buffer."""
+        samples = jax.tree.map(
+            lambda buf, x: buf.at[self.count].set(jnp.where(when, x, buf[self.count])),
+            self.samples,
+            sample,
+        )
+        count = jnp.minimum(self.count + jnp.where(when, 1, 0), _capacity(samples) - 1)
+        return Recording(samples, count)
 
 
 def _capacity(samples):
@@ -107,7 +118,7 @@ def solve_recorded(
     h0,
     max_step: Callable,
     max_steps: int,
-    secant_iterations: int = 16,
+    secant_iterations: int = 32,
 ) -> PhaseEnd:
     """Integrate `field(t, y, args, recording)` from `t0` until `event(t, y, f, args,
     recording)`, positive at the start, falls to zero.
@@ -136,9 +147,7 @@ def solve_recorded(
         accept = (ratio <= 1.0) & finite
         crossed = accept & (event(t + h, y1, f1, args, rec) <= 0.0)
         advance = accept & ~crossed
-        new_rec = jax.lax.cond(
-            advance, lambda r: r.append(record(t + h, y1, f1, args)), lambda r: r, rec
-        )
+        new_rec = rec.append(record(t + h, y1, f1, args), when=advance)
         keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(advance, a, b), new, old)
         ratio = jax.lax.stop_gradient(ratio)
         factor = jnp.where(finite, jnp.clip(0.9 * ratio**-0.2, 0.2, 5.0), 0.2)
@@ -165,30 +174,42 @@ def solve_recorded(
     t, y, f, h, recording, steps, crossed = jax.lax.while_loop(cond, body, start)
     t = eqx.error_if(t, ~crossed, "step loop reached max_steps before the phase ended")
 
-    # The crossing lies within (t, t + h]: Illinois regula falsi on the step length.
-    def event_after(length):
+    # The crossing lies within (t, t + h]: Illinois regula falsi on the step length, on
+    # the primal alone (the derivative comes from the implicit function theorem below).
+    # Its accuracy need only be enough for the Newton correction that follows, whose
+    # error is the square of it.
+    def event_after(length, t, y, f, args, recording):
         y1, _, f1 = _step(field, t, y, f, length, args, recording)
         return event(t + length, y1, f1, args, recording)
 
-    def illinois(state, _):
-        lo, e_lo, hi, e_hi = state
+    primal = jax.lax.stop_gradient((t, y, f, args, recording))
+    primal_event = lambda length: event_after(length, *primal)
+
+    def unresolved(state):
+        lo, _, hi, e_hi, iteration = state
+        wide = jnp.abs(hi - lo) > _BRACKET_TOLERANCE * jnp.abs(h)
+        return wide & (e_hi != 0.0) & (iteration < secant_iterations)
+
+    def illinois(state):
+        lo, e_lo, hi, e_hi, iteration = state
         moved = e_hi != e_lo  # converged to rounding: stay
         mid = hi - e_hi * (hi - lo) / jnp.where(moved, e_hi - e_lo, 1.0)
         mid = jnp.where(moved, mid, hi)
-        e_mid = event_after(mid)
+        e_mid = primal_event(mid)
         same_side = (e_mid > 0.0) == (e_hi > 0.0)
         lo, e_lo = jnp.where(same_side, lo, hi), jnp.where(same_side, 0.5 * e_lo, e_hi)
-        return (lo, e_lo, mid, e_mid), None
+        return lo, e_lo, mid, e_mid, iteration + 1
 
-    e_start = event(t, y, f, args, recording)
-    (_, _, length, _), _ = jax.lax.scan(
-        illinois, (jnp.zeros_like(h), e_start, h, event_after(h)), None, length=secant_iterations
+    h = jax.lax.stop_gradient(h)
+    start = (jnp.zeros_like(h), event(*primal), h, primal_event(h), 0)
+    _, _, length, _, _ = jax.lax.while_loop(unresolved, illinois, start)
+    # The derivative, by the implicit function theorem: one Newton correction whose slope
+    # carries no derivative.
+    value, slope = jax.jvp(
+        lambda length: event_after(length, t, y, f, args, recording),
+        (length,),
+        (jnp.ones_like(length),),
     )
-    # Differentiating the iterations would divide by e_hi - e_lo -> 0: take the derivative
-    # by the implicit function theorem instead, with one Newton correction whose slope is
-    # held constant (its primal change is at rounding level).
-    length = jax.lax.stop_gradient(length)
-    value, slope = jax.jvp(event_after, (length,), (jnp.ones_like(length),))
     slope = jax.lax.stop_gradient(slope)
     length = length - value / jnp.where(slope != 0.0, slope, 1.0)
     length = jnp.where(ended_at_start, 0.0, length)

@@ -533,9 +533,17 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
     initial = PhaseEnd(first.t, start, start, recording, first.steps)
     steps = jnp.zeros((), jnp.int32)
     carry = (initial, p, pending, jnp.zeros((), int_), steps, jnp.asarray(True))
-    end, p, *_ = jax.lax.while_loop(lambda c: c[-1], segment, carry)
+    end, p, _, _, steps, _ = jax.lax.while_loop(
+        lambda c: c[-1] & (c[-2] < max_steps), segment, carry
+    )
+    end = eqx.error_if(end, steps >= max_steps, "contact phase: step budget (max_steps) spent")
     return end, p
 
+
+# The contact phase stops where S1 falls to this fraction of S*: there the load has caught
+# up with the hinge ahead of it, V0 and the force grow without bound, and the mechanism of
+# 3.3 no longer holds (the report does not meet this case).
+_OVERTAKEN = 1e-3
 
 # In s, ln V0 falls at the rate |V0'|, steadily once the hinges have settled, where the
 # error estimate would let the step grow without bound: cap it at this many e-folds of V0.
@@ -613,7 +621,8 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
 
     def contact_event(s, y, f, p, r):
         force, _ = _contact_force(y, p, r)
-        return jnp.minimum(force / p.phi, y.log_v0 - log_rest)
+        overtaking = y.s1 / p.s_star - _OVERTAKEN
+        return jnp.minimum(jnp.minimum(force / p.phi, y.log_v0 - log_rest), overtaking)
 
     lookup_bound = _lookup_bound(lambda y: jnp.exp(y.log_v0) * y.vehicle_tangential)
 
@@ -640,6 +649,14 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
     second, p_end = _contact_segments(sliding, contact, first, p, contact_event, max_steps)
     force_end, theta_end = _contact_force(second.y, p_end, second.recording)
     separated = force_end / phi < second.y.log_v0 - log_rest
+    overtaken = second.y.s1 / s_star < 2.0 * _OVERTAKEN
+    separated = eqx.error_if(
+        separated,
+        overtaken,
+        "the load caught up with the hinge ahead of it (S1 -> 0) in the contact phase: the "
+        "vehicle slides faster than the barrier's plastic zone can run ahead, outside the "
+        "three-hinge mechanism of report 3.3",
+    )
     # The free phase runs only after a separation; otherwise its event is negative at its
     # start and it takes no step.
     free_rest = jnp.where(separated, log_rest, second.y.log_v0 + 1.0)
