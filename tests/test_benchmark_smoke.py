@@ -61,3 +61,55 @@ def test_normal_impact_benchmark_quick(tmp_path):
         "normal_impact_gradient.png",
     ):
         assert (out / name).stat().st_size > 0
+
+
+OBLIQUE_SCRIPT = SCRIPT.parent / "oblique_impact.py"
+
+
+def test_oblique_impact_benchmark_quick(tmp_path):
+    # Two oblique compilations (30-75 s each on 2 shared cores) dominate; the gradient section
+    # only exercises its guarded child process, which the quick run stops after 15 s.
+    out = tmp_path / "results"
+    proc = subprocess.run(
+        [sys.executable, str(OBLIQUE_SCRIPT), "--quick", "--out", str(out)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert "SUMMARY" in proc.stdout
+
+    data = json.loads((out / "oblique_impact.json").read_text())
+    for section in (
+        "meta",
+        "scenarios",
+        "error_vs_time",
+        "throughput",
+        "gradient",
+        "stability",
+        "targets",
+        "surprises",
+    ):
+        assert section in data, section
+    assert data["meta"]["quick"] is True
+    assert set(data["targets"]) == {"throughput_ratio", "energy_balance"}
+    for target in data["targets"].values():
+        assert target["verdict"] in ("PASS", "FAIL")
+
+    # The reference (the model at rtol 1e-9) is usable for every quick scenario, and rtol 1e-6
+    # agrees with it: a check on the benchmark's plumbing, not on speed.
+    assert data["scenarios"]["reference_failures"] == {}
+    rows = data["error_vs_time"]["rows"]
+    assert rows and rows[0]["ok"] and rows[0]["error"] < 1e-4
+    throughput = data["throughput"]["rows"]
+    assert throughput["oblique"][0]["ok"] and throughput["normal_ode"][0]["ok"]
+    assert data["gradient"]["rows"]
+    assert data["stability"]["sections"][0]["results"]
+    for name in (
+        "oblique_impact_error_vs_time.png",
+        "oblique_impact_throughput.png",
+        "oblique_impact_gradient.png",
+        "oblique_impact_stability.png",
+    ):
+        assert (out / name).stat().st_size > 0
