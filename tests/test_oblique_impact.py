@@ -121,3 +121,19 @@ def test_bad_input_names_the_field(kwargs, field):
     friction = args.pop("friction", 0.0)
     with pytest.raises(ValueError, match=field):
         oblique_impact(**args, friction=friction)
+
+
+def test_load_catching_up_with_the_hinge_is_an_error_not_a_blow_up():
+    # A fast slide: S1 -> 0 in the contact phase, where V0 and the force grow without
+    # bound (the three-hinge mechanism of 3.3 no longer holds).
+    with pytest.raises(Exception, match="caught up with the hinge"):
+        jax.block_until_ready(oblique_impact(20.8, 1.92, 0.589, 0.649, rtol=1e-9).damage)
+
+
+def test_friction_stops_the_slide_and_takes_its_kinetic_energy():
+    # A light vehicle at a steep angle with friction: the slide stops in contact, and the
+    # vehicle then stays with the barrier (static friction), never sliding backwards.
+    mu, vh = 0.01, 0.00872
+    r = oblique_impact(mu, 1.1, 0.0996, vh, friction=0.2, rtol=1e-9)
+    assert float(r.exit_tangential_speed) == 0.0
+    assert float(r.friction_work) == pytest.approx(0.5 * mu * vh**2, rel=1e-6)

@@ -51,17 +51,17 @@ class Recording(eqx.Module):
     """`samples` (leaves with a leading axis of `capacity`) of which the first `count` are
     filled; the rest repeat the last filled sample or hold the initial fill."""
 
-    samples: PyTree[Float[Array, " capacity"]]
+    samples: dict[str, Float[Array, " capacity"]]
     count: Int[Array, ""]
 
-    def append(self, sample, when=True):
-        """Record `sample` if `when`. The slot is written either way (with its own content
-        when not), so that under `vmap` a step costs one sample, not a copy of the buffer."""
-        samples = jax.tree.map(
-            lambda buf, x: buf.at[self.count].set(jnp.where(when, x, buf[self.count])),
-            self.samples,
-            sample,
-        )
+    def append(self, sample: dict, when=True):
+        """Record `sample` (the entries this recording keeps) if `when`. The slot is written
+        either way (with its own content when not), so that under `vmap` a step costs one
+        sample, not a copy of the buffer."""
+        samples = {
+            name: buf.at[self.count].set(jnp.where(when, sample[name], buf[self.count]))
+            for name, buf in self.samples.items()
+        }
         count = jnp.minimum(self.count + jnp.where(when, 1, 0), _capacity(samples) - 1)
         return Recording(samples, count)
 
@@ -172,7 +172,10 @@ def solve_recorded(
         ended_at_start,
     )
     t, y, f, h, recording, steps, crossed = jax.lax.while_loop(cond, body, start)
-    t = eqx.error_if(t, ~crossed, "step loop reached max_steps before the phase ended")
+    # On y, which every caller uses: an error on an unused output would be dropped.
+    y = eqx.error_if(
+        y, ~crossed, "the step budget (max_steps) was spent before the phase ended: raise max_steps"
+    )
 
     # The crossing lies within (t, t + h]: Illinois regula falsi on the step length, on
     # the primal alone (the derivative comes from the implicit function theorem below).

@@ -256,8 +256,14 @@ class _Sliding(eqx.Module):
     slope_work: Scalar
 
 
+def _friction_deceleration(vh, force, p: _Params):
+    """Coulomb: f P / M while the vehicle slides; once it stops sliding, static friction
+    holds it (the barrier takes no axial motion)."""
+    return jnp.where(vh > 0.0, p.friction * force / p.mu, 0.0)
+
+
 def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
-    vh = y.vehicle_tangential
+    vh = jnp.maximum(y.vehicle_tangential, 0.0)
     force = p.phi
     dv0 = _acceleration(y.s1, y.s2, force)
     g1, g2 = _hinge_terms(y.s1, y.s2, force)
@@ -277,7 +283,7 @@ def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
         position=vh,
         rotation=y.v0 / y.s1,
         vehicle_normal=-vehicle * force / p.mu,
-        vehicle_tangential=-vehicle * p.friction * force / p.mu,
+        vehicle_tangential=-vehicle * _friction_deceleration(vh, force, p),
         crush=vehicle * (y.vehicle_normal - contact_velocity),
         contact_displacement=contact_velocity,
         backing_work=backing,
@@ -290,7 +296,7 @@ def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
 def _contact_force(y: _Sliding, p: _Params, recording):
     """(force ratio, slope under the load): (3.3.20)-(3.3.22) solved for the force."""
     v0 = jnp.exp(y.log_v0)
-    vh = y.vehicle_tangential
+    vh = jnp.maximum(y.vehicle_tangential, 0.0)
     psi, curvature = _slope_memory(recording, y.position, p.segment)
     theta = psi - y.rotation
     s1, s2 = y.s1, y.s2
@@ -304,7 +310,7 @@ def _contact_force(y: _Sliding, p: _Params, recording):
 def _sliding_field(in_contact: bool):
     def field(s, y: _Sliding, p: _Params, recording) -> _Sliding:
         v0 = jnp.exp(y.log_v0)
-        vh = y.vehicle_tangential
+        vh = jnp.maximum(y.vehicle_tangential, 0.0)
         if in_contact:
             force, theta = _contact_force(y, p, recording)
             load_speed = vh
@@ -322,7 +328,7 @@ def _sliding_field(in_contact: bool):
             position=v0 * load_speed,
             rotation=v0 * v0 / y.s1,
             vehicle_normal=zero,
-            vehicle_tangential=-v0 * p.friction * force / p.mu,
+            vehicle_tangential=-v0 * _friction_deceleration(vh, force, p),
             contact_displacement=v0 * contact_velocity,
             backing_work=v0 * backing,
             hinge_work=v0 * hinge,
@@ -416,12 +422,27 @@ def _record_sliding(in_contact: bool):
     return record
 
 
-def _empty_recording(capacity, dtype):
-    names = (
-        "hinge rotation curvature phase time v0 s1 s2 position vehicle_normal "
-        "vehicle_tangential force slope crush contact_displacement backing_work hinge_work "
-        "friction_work slope_work"
-    ).split()
+# What the recording keeps: the right hinge's trace for the memory, the motion for the
+# displacement field (max_deflection), and with `history` the rest of each sample.
+_MEMORY = ("hinge", "rotation", "curvature")
+_MOTION = ("time", "v0", "s1", "s2", "position")
+_HISTORY = (
+    "phase",
+    "vehicle_normal",
+    "vehicle_tangential",
+    "force",
+    "slope",
+    "crush",
+    "contact_displacement",
+    "backing_work",
+    "hinge_work",
+    "friction_work",
+    "slope_work",
+)
+
+
+def _empty_recording(capacity, dtype, history):
+    names = _MEMORY + _MOTION + (_HISTORY if history else ())
     # Unrecorded hinge positions are +inf, so that a sorted search never lands on them.
     samples = {n: jnp.full((capacity,), jnp.inf if n == "hinge" else 0.0, dtype) for n in names}
     return Recording(samples, jnp.zeros((), jnp.int32))
@@ -536,7 +557,9 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
     end, p, _, _, steps, _ = jax.lax.while_loop(
         lambda c: c[-1] & (c[-2] < max_steps), segment, carry
     )
-    end = eqx.error_if(end, steps >= max_steps, "contact phase: step budget (max_steps) spent")
+    end = eqx.error_if(
+        end, steps >= max_steps, "contact phase: the step budget (max_steps) was spent: raise it"
+    )
     return end, p
 
 
@@ -550,7 +573,7 @@ _OVERTAKEN = 1e-3
 _EFOLDS_PER_STEP = 2.0
 
 
-def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
+def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     """All phases in the speed-free dimensionless variables. With `t_end`, the moving
     load: phase 1 alone with no vehicle, to T = t_end."""
     dtype = jnp.result_type(mu)
@@ -561,7 +584,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, t_end=None):
     capacity = 3 * max_steps + 8
     everything = (jnp.zeros((), jnp.int32), jnp.asarray(capacity, jnp.int32))
     p = _Params(mu, phi, friction, s_star, everything, moving_load=moving_load)
-    recording = _empty_recording(capacity, dtype)
+    recording = _empty_recording(capacity, dtype, history)
     atol = 1e-3 * rtol
     acceleration = (phi - s_star) / s_star
     time_scale = t_end if moving_load else 1.0 / (acceleration + phi / mu)
@@ -705,12 +728,17 @@ def _padded(samples, count):
     return jax.tree.map(lambda a: a[index], samples)
 
 
-def _history(samples, count, p: _Params, n_x):
+def _displacement_grid(samples, count, n_x):
+    """(x, W(x, T_k)) on `n_x` points spanning every plastic zone of the motion."""
     x = jnp.linspace(
         jnp.min(samples["position"] - samples["s2"]),
         jnp.max(samples["position"] + samples["s1"]),
         n_x,
     )
+    return x, _displacement_field(samples, count, x)
+
+
+def _history(samples, count, p: _Params, x, displacement):
     vn, vh = samples["vehicle_normal"], samples["vehicle_tangential"]
     vehicle_energy = 0.0 if p.moving_load else 0.5 * p.mu * (vn**2 + vh**2)
     return ObliqueImpactHistory(
@@ -732,14 +760,14 @@ def _history(samples, count, p: _Params, n_x):
         beam_kinetic_energy=_beam_kinetic_energy(samples["v0"], samples["s1"], samples["s2"]),
         vehicle_kinetic_energy=jnp.zeros_like(vn) + vehicle_energy,
         x=x,
-        displacement=_displacement_field(samples, count, x),
+        displacement=displacement,
         n_saved=count,
     )
 
 
 def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
     p, first, second, (third, separated, theta_end) = _solve(
-        mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps
+        mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps, history=history
     )
     damage = first.y.crush
     contact_rest, contact_extra = _rest(second, True)
@@ -750,13 +778,19 @@ def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
     # At separation the vehicle keeps the load point's velocity; at rest in contact it is
     # (3.3.3) with V0 = 0: theta V_H.
     at_separation = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
-    exit_normal = jnp.where(separated, at_separation, theta_end * second.y.vehicle_tangential)
-    exit_tangential = second.y.vehicle_tangential
+    exit_normal = jnp.where(
+        separated, at_separation, theta_end * jnp.maximum(second.y.vehicle_tangential, 0.0)
+    )
+    # (Friction may have stopped the slide within the last step: no negative overshoot.)
+    exit_tangential = jnp.maximum(second.y.vehicle_tangential, 0.0)
     recording = third.recording
     samples = _padded(recording.samples, recording.count)
-    samples["crush"] = jnp.where(samples["phase"] > 1.0, damage, samples["crush"])
-    hist = _history(samples, recording.count, p, n_x)
-    max_deflection = jnp.maximum(jnp.max(hist.displacement[-1]), w_final)
+    x, displacement = _displacement_grid(samples, recording.count, n_x)
+    max_deflection = jnp.maximum(jnp.max(displacement[-1]), w_final)
+    hist = None
+    if history:
+        samples["crush"] = jnp.where(samples["phase"] > 1.0, damage, samples["crush"])
+        hist = _history(samples, recording.count, p, x, displacement)
     return ObliqueImpact(
         t_star=first.t,
         t_final=t_final,
@@ -774,7 +808,7 @@ def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
         hinge_work=end.hinge_work,
         friction_work=end.friction_work,
         slope_work=end.slope_work,
-        history=hist if history else None,
+        history=hist,
     )
 
 
@@ -863,15 +897,16 @@ def _moving_load(phi, vh, t_end, *, rtol, max_steps):
     def solve(phi, vh, t_end):
         one = jnp.ones_like(phi)
         p, first, _, _ = _solve(
-            one, phi, one, vh, 0.0 * one, rtol=rtol, max_steps=max_steps, t_end=t_end
+            one, phi, one, vh, 0.0 * one, rtol=rtol, max_steps=max_steps, history=True, t_end=t_end
         )
         recording = first.recording
         samples = _padded(recording.samples, recording.count)
+        grid = _displacement_grid(samples, recording.count, _N_X)
         return MovingLoad(
             s1=first.y.s1,
             s2=first.y.s2,
             v0=first.y.v0,
-            history=_history(samples, recording.count, p, _N_X),
+            history=_history(samples, recording.count, p, *grid),
         )
 
     solve = forward_jacobian_jvp(solve)
