@@ -52,20 +52,21 @@ vehicle's kinetic-energy loss is crush + friction work + work on the barrier (P 
 `slope_work` (P theta V_H): the report holds V_H fixed, and this last term is the work
 of whatever holds it so; it is reported, not fed back into V_H.
 
-Status (issue 3 is open). Checked: the moving load reaches (3.3.18)-(3.3.19); with V_H = 0
-the model reproduces `normal_impact` to 1e-10; the energy balance closes at every step;
-at rest S1 = S2. Known limits:
-- Heavy vehicles (mu above about 50): in the contact phase the hinges settle on a time
-  scale about 1/mu of the barrier's deceleration, and the explicit steps are then bounded
-  by stability; the step budget runs out. It needs an L-stable step in
-  `_solve.recorded_rk` (a Rosenbrock or ESDIRK method).
-- Derivatives once the load reads the recorded trace (F > S*) are 5-15 % off, though the
-  primal converges. The curvature deposited by the right hinge jumps where the hinge
-  stood at T* (handled: the contact phase is split there), and this is a neutral delay
-  equation, in which such jumps propagate; a derivative that steps across one misses its
-  contribution. Tracking the propagated jumps in the step loop is the next step.
-- `max_deflection` integrates the velocity field over the recorded steps by the
-  trapezoidal rule on 129 points (error O(step^2)).
+Once the slide stops (friction), static friction holds the vehicle: V_H stays 0.
+
+Where the model stops with an error rather than an answer:
+- The load catches up with the hinge ahead of it (S1 -> 0 in the contact phase; fast
+  slides, small angles): V0 and the force then grow without bound, outside the
+  three-hinge mechanism; the report does not meet this case.
+- The step budget runs out (`max_steps`). Heavy vehicles (mu above about 50) crush for
+  T* ~ mu V_N / phi with the hinges at their steady state, where the explicit steps are
+  bounded by stability, not accuracy: they need a larger budget (an L-stable step in
+  `_solve.recorded_rk` would remove this).
+
+Derivatives: the contact phase runs in segments between the breakpoints of Psi' (see
+`_contact_segments`), so that they match finite differences; `max_deflection`
+integrates the velocity field over the recorded steps by the trapezoidal rule on 129
+points (error O(step^2)).
 """
 
 import functools
