@@ -42,7 +42,6 @@ import json
 import logging
 import math
 import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -50,6 +49,7 @@ from pathlib import Path
 import diffrax
 import jax.numpy as jnp
 import numpy as np
+from _common import drain, machine, save, source_fingerprint, sources_changed
 
 import barrierjax
 from barrierjax.hinge import normal_impact, oblique_impact
@@ -276,19 +276,6 @@ def run_timed(compiled, args, *, warm_up=True, max_reps=20, min_total=0.2):
         if len(runs) >= 3 and sum(runs) >= min_total:
             break
     return out, min(runs)
-
-
-def drain():
-    """Collect a failed solve's pending runtime error, so that it is not raised again at exit."""
-    try:
-        jax.effects_barrier()
-    except Exception:  # noqa: BLE001
-        try:  # the failed token stays in jax's token set (a private API; best effort)
-            from jax._src import dispatch
-
-            dispatch.runtime_tokens.clear()
-        except Exception:  # noqa: BLE001, S110
-            pass
 
 
 def first_line(exc: BaseException) -> str:
@@ -998,15 +985,6 @@ def print_stability(cfg, s, section):
 # Plots.
 
 
-def save(fig, path: Path) -> Path:
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
-
-
 def plots(out_dir: Path, data: dict, cfg: dict):
     import matplotlib
 
@@ -1105,17 +1083,6 @@ def plots(out_dir: Path, data: dict, cfg: dict):
 
 
 # ---------------------------------------------------------------------------------------
-
-
-def source_fingerprint() -> dict:
-    """sha256 of every barrierjax source file, to detect a model edited during a run."""
-    import hashlib
-
-    root = Path(barrierjax.__file__).resolve().parent
-    return {
-        str(p.relative_to(root.parent)): hashlib.sha256(p.read_bytes()).hexdigest()[:16]
-        for p in sorted(root.rglob("*.py"))
-    }
 
 
 def jsonable(x):
@@ -1309,18 +1276,9 @@ def main(argv=None):
                 f"(d) rtol {sec['rtol']:.0e}: {bad} of {len(sec['results'])} scenarios"
             )
 
-    sources_end = source_fingerprint()
-    changed = sorted(
-        k
-        for k in set(sources_start) | set(sources_end)
-        if sources_start.get(k) != sources_end.get(k)
-    )
+    changed = sources_changed(sources_start)
     if changed:
-        surprises.append(
-            "barrierjax sources changed on disk during this run: "
-            + ", ".join(changed)
-            + "; the run used the versions imported at its start (meta.barrierjax_sources)"
-        )
+        surprises.append(changed)
 
     elapsed = time.perf_counter() - start
     data = dict(
@@ -1328,14 +1286,7 @@ def main(argv=None):
             date=datetime.date.today().isoformat(),
             quick=args.quick,
             seed=args.seed,
-            machine=dict(
-                cpu_count=os.cpu_count(),
-                platform=platform.platform(),
-                processor=platform.processor(),
-                python=platform.python_version(),
-                load_average_start=load_start,
-                load_average_end=os.getloadavg(),
-            ),
+            machine=machine(load_start),
             versions=dict(
                 jax=jax.__version__,
                 diffrax=diffrax.__version__,

@@ -1,0 +1,66 @@
+"""What every benchmark script shares: collecting a failed solve's error, saving figures,
+describing the machine, and noticing a model edited on disk while a run was going."""
+
+import hashlib
+import os
+import platform
+from pathlib import Path
+
+import jax
+
+import barrierjax
+
+
+def drain():
+    """Collect a failed solve's pending runtime error, so that it is not raised again at exit."""
+    try:
+        jax.effects_barrier()
+    except Exception:  # noqa: BLE001
+        try:  # the failed token stays in jax's token set (a private API; best effort)
+            from jax._src import dispatch
+
+            dispatch.runtime_tokens.clear()
+        except Exception:  # noqa: BLE001, S110
+            pass
+
+
+def save(fig, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def machine(load_start) -> dict:
+    return dict(
+        cpu_count=os.cpu_count(),
+        platform=platform.platform(),
+        processor=platform.processor(),
+        python=platform.python_version(),
+        load_average_start=load_start,
+        load_average_end=os.getloadavg(),
+    )
+
+
+def source_fingerprint() -> dict:
+    """sha256 of every barrierjax source file, to detect a model edited during a run."""
+    root = Path(barrierjax.__file__).resolve().parent
+    return {
+        str(p.relative_to(root.parent)): hashlib.sha256(p.read_bytes()).hexdigest()[:16]
+        for p in sorted(root.rglob("*.py"))
+    }
+
+
+def sources_changed(start: dict) -> str | None:
+    """A line for the run's surprises if the sources differ from `start`, else None."""
+    end = source_fingerprint()
+    changed = sorted(k for k in set(start) | set(end) if start.get(k) != end.get(k))
+    if not changed:
+        return None
+    return (
+        "barrierjax sources changed on disk during this run: "
+        + ", ".join(changed)
+        + "; the run used the versions imported at its start (meta.barrierjax_sources)"
+    )
