@@ -707,18 +707,42 @@ def _rest(end, in_contact):
     return remaining, (0.5 * v0 + sliding) * remaining
 
 
-def _displacement_field(samples, count, x):
-    """W(x, T_k) for every recorded T_k: the velocity field (3.3.2) integrated over the
-    recorded steps by the trapezoidal rule (error O(step^2) where a hinge crosses x)."""
-    v0, s1, s2, position = (samples[k][:, None] for k in ("v0", "s1", "s2", "position"))
-    offset = x[None, :] - position
-    v = v0 * jnp.where(
+def _velocity_field(v0, s1, s2, position, x):
+    """The beam's velocity at x, (3.3.2): V0 under the load, falling linearly to zero at
+    the hinges S1 ahead and S2 behind."""
+    offset = x - position
+    return v0 * jnp.where(
         offset >= 0.0, jnp.maximum(1.0 - offset / s1, 0.0), jnp.maximum(1.0 + offset / s2, 0.0)
     )
+
+
+def _motion(samples, k):
+    return tuple(samples[name][k] for name in ("v0", "s1", "s2", "position"))
+
+
+def _displacement_field(samples, count, x):
+    """W(x, T_k) for every recorded T_k: the velocity field integrated over the recorded
+    steps by the trapezoidal rule (error O(step^2) where a hinge crosses x)."""
+    v = _velocity_field(*(m[:, None] for m in _motion(samples, slice(None))), x[None, :])
     recorded = jnp.arange(1, v.shape[0], dtype=count.dtype)[:, None] < count
     dt = jnp.where(recorded, jnp.diff(samples["time"])[:, None], 0.0)
     increments = 0.5 * (v[1:] + v[:-1]) * dt
     return jnp.concatenate([jnp.zeros_like(v[:1]), jnp.cumsum(increments, axis=0)])
+
+
+def _final_displacement(samples, count, x):
+    """W(x) at the last recorded time, as `_displacement_field` but over the recorded
+    steps alone (a few dozen, where the buffer holds thousands)."""
+
+    def step(k, carry):
+        w, v = carry
+        v_next = _velocity_field(*_motion(samples, k + 1), x)
+        dt = samples["time"][k + 1] - samples["time"][k]
+        return w + 0.5 * (v + v_next) * dt, v_next
+
+    v_first = _velocity_field(*_motion(samples, 0), x)
+    w, _ = jax.lax.fori_loop(0, count - 1, step, (jnp.zeros_like(v_first), v_first))
+    return w
 
 
 def _padded(samples, count):
@@ -729,14 +753,13 @@ def _padded(samples, count):
     return jax.tree.map(lambda a: a[index], samples)
 
 
-def _displacement_grid(samples, count, n_x):
-    """(x, W(x, T_k)) on `n_x` points spanning every plastic zone of the motion."""
-    x = jnp.linspace(
+def _grid(samples, n_x):
+    """`n_x` points spanning every plastic zone of the motion."""
+    return jnp.linspace(
         jnp.min(samples["position"] - samples["s2"]),
         jnp.max(samples["position"] + samples["s1"]),
         n_x,
     )
-    return x, _displacement_field(samples, count, x)
 
 
 def _history(samples, count, p: _Params, x, displacement):
@@ -786,12 +809,16 @@ def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
     exit_tangential = jnp.maximum(second.y.vehicle_tangential, 0.0)
     recording = third.recording
     samples = _padded(recording.samples, recording.count)
-    x, displacement = _displacement_grid(samples, recording.count, n_x)
-    max_deflection = jnp.maximum(jnp.max(displacement[-1]), w_final)
+    x = _grid(samples, n_x)
     hist = None
     if history:
+        displacement = _displacement_field(samples, recording.count, x)
+        final_displacement = displacement[-1]
         samples["crush"] = jnp.where(samples["phase"] > 1.0, damage, samples["crush"])
         hist = _history(samples, recording.count, p, x, displacement)
+    else:
+        final_displacement = _final_displacement(samples, recording.count, x)
+    max_deflection = jnp.maximum(jnp.max(final_displacement), w_final)
     return ObliqueImpact(
         t_star=first.t,
         t_final=t_final,
@@ -902,12 +929,13 @@ def _moving_load(phi, vh, t_end, *, rtol, max_steps):
         )
         recording = first.recording
         samples = _padded(recording.samples, recording.count)
-        grid = _displacement_grid(samples, recording.count, _N_X)
+        x = _grid(samples, _N_X)
+        displacement = _displacement_field(samples, recording.count, x)
         return MovingLoad(
             s1=first.y.s1,
             s2=first.y.s2,
             v0=first.y.v0,
-            history=_history(samples, recording.count, p, *grid),
+            history=_history(samples, recording.count, p, x, displacement),
         )
 
     solve = forward_jacobian_jvp(solve)
