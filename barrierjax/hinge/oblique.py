@@ -513,20 +513,15 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
     int_ = recording.count.dtype
     first_hinge = recording.samples["hinge"][0]  # S*, recorded at T = 0
     # The last sample of the crushing phase is the left limit at H(T*).
-    at_t_star = (start.position + start.s1, recording.count - 1)
-    before_s_star = start.position < first_hinge
-    pending = _Breakpoints(
-        jnp.where(
-            before_s_star,
-            jnp.stack([first_hinge, at_t_star[0]]),
-            jnp.stack([at_t_star[0], jnp.inf]),
-        ),
-        jnp.where(before_s_star, jnp.stack([0, at_t_star[1]]), jnp.stack([at_t_star[1], 0])).astype(
-            int_
-        ),
-        jnp.where(
-            before_s_star, jnp.stack([0, at_t_star[1] + 1]), jnp.stack([at_t_star[1] + 1, 0])
-        ).astype(int_),
+    h_t_star, left = start.position + start.s1, recording.count - 1
+    no_s_star = _Breakpoints(
+        jnp.stack([h_t_star, jnp.inf]), jnp.stack([left, 0]), jnp.stack([left + 1, 0])
+    )
+    s_star_first = _Breakpoints(
+        jnp.stack([first_hinge, h_t_star]), jnp.stack([0, left]), jnp.stack([0, left + 1])
+    )
+    pending = jax.tree.map(
+        lambda a, b: jnp.where(start.position < first_hinge, a, b), s_star_first, no_s_star
     )
 
     def segment(carry):
