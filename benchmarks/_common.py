@@ -1,6 +1,7 @@
 """What every benchmark script shares: collecting a failed solve's error, saving figures,
 describing the machine, and noticing a model edited on disk while a run was going."""
 
+import datetime
 import hashlib
 import os
 import platform
@@ -31,6 +32,28 @@ def save(fig, path: Path) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def meta(args, load_start, sources_start, changed, **versions) -> dict:
+    """What every results file says of its run: when, how, on what, with which code."""
+    import diffrax
+    import numpy as np
+
+    return dict(
+        date=datetime.date.today().isoformat(),
+        quick=args.quick,
+        seed=args.seed,
+        machine=machine(load_start),
+        versions=dict(
+            jax=jax.__version__,
+            diffrax=diffrax.__version__,
+            barrierjax=getattr(barrierjax, "__version__", "?"),
+            numpy=np.__version__,
+            **versions,
+        ),
+        barrierjax_sources=sources_start,
+        sources_changed_during_run=changed,
+    )
 
 
 def machine(load_start) -> dict:

@@ -33,7 +33,6 @@ import jax
 jax.config.update("jax_enable_x64", True)
 
 import argparse
-import datetime
 import json
 import logging
 import math
@@ -45,9 +44,8 @@ from pathlib import Path
 import diffrax
 import jax.numpy as jnp
 import numpy as np
-from _common import drain, machine, save, source_fingerprint, sources_changed
+from _common import drain, meta, save, source_fingerprint, sources_changed
 
-import barrierjax
 from barrierjax.hinge import normal as _normal
 from barrierjax.hinge.normal import normal_impact
 
@@ -1069,19 +1067,7 @@ def main(argv=None):
     elapsed = time.perf_counter() - start
     data = dict(
         meta=dict(
-            date=datetime.date.today().isoformat(),
-            quick=args.quick,
-            seed=args.seed,
-            machine=machine(load_start),
-            versions=dict(
-                jax=jax.__version__,
-                diffrax=diffrax.__version__,
-                barrierjax=getattr(barrierjax, "__version__", "?"),
-                numpy=np.__version__,
-                mpmath=mp.__version__,
-            ),
-            barrierjax_sources=sources_start,
-            sources_changed_during_run=changed,
+            **meta(args, load_start, sources_start, changed, mpmath=mp.__version__),
             n_scenarios=n,
             reference_digits=cfg["ref_dps"],
             reference_self_check=ref_check,
