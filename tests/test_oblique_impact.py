@@ -137,3 +137,18 @@ def test_friction_stops_the_slide_and_takes_its_kinetic_energy():
     r = oblique_impact(mu, 1.1, 0.0996, vh, friction=0.2, rtol=1e-9)
     assert float(r.exit_tangential_speed) == 0.0
     assert float(r.friction_work) == pytest.approx(0.5 * mu * vh**2, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "mu, phi, vn, vh, friction",
+    [(3.6486, 3.0642, 0.36637, 0.27559, 0.0), (2.5345, 3.7609, 0.29556, 0.45929, 0.17545)],
+)
+def test_contact_ending_just_short_of_a_breakpoint(mu, phi, vn, vh, friction):
+    # The segment's end event is the minimum of the contact's own end and the distance to
+    # the next breakpoint of Psi': a kink where regula falsi alone crawled, and the Newton
+    # step after it flew off (a spent step budget, then NaN). Both tolerances must agree.
+    coarse, fine = (
+        oblique_impact(mu, phi, vn, vh, friction=friction, rtol=rtol) for rtol in (1e-6, 1e-9)
+    )
+    for name in ("t_final", "w_final", "damage", "exit_angle_deg"):
+        assert float(getattr(coarse, name)) == pytest.approx(float(getattr(fine, name)), rel=1e-5)

@@ -6,18 +6,19 @@ under a moving load, report 3.3) needs the solution at an earlier, state-depende
 This loop records one sample per accepted step into a buffer carried in the loop state
 and hands the buffer to the vector field. A phase ends where a real-valued event function
 falls to zero: the crossing step is retaken with the length that puts the event exactly
-on zero (secant iterations on the step length), so the phase's end carries an exact
-gradient. Differentiate in forward mode (`sensitivity.forward_jacobian_jvp`): the loop is
-a `lax.while_loop`.
+on zero (safeguarded regula falsi on the step length, then one Newton correction), so the
+phase's end carries an exact gradient. Differentiate in forward mode
+(`sensitivity.forward_jacobian_jvp`): the loops are while loops.
 """
 
 from collections.abc import Callable
 
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float, Int, PyTree
+from jaxtyping import Array, Bool, Float, Int, PyTree
 
 # Dormand & Prince (1980), the tableau of diffrax.Dopri5; the last stage is first-same-as-last.
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -102,6 +103,21 @@ class PhaseEnd(eqx.Module):
     derivative: PyTree[Float[Array, ""]]
     recording: Recording
     steps: Int[Array, ""]
+    complete: Bool[Array, ""]  # the event was reached within the step budget
+
+
+def require_complete(end: PhaseEnd, phase: str) -> PhaseEnd:
+    """`end`, with a run-time error if its phase spent the step budget before its event.
+
+    The check is the caller's, not `solve_recorded`'s: under `vmap` a solve inside another
+    loop also runs for members that loop has finished with, and their results (and
+    failures) are discarded."""
+    y = eqx.error_if(
+        end.y,
+        ~end.complete,
+        f"{phase}: the step budget (max_steps) was spent before the phase ended: raise max_steps",
+    )
+    return eqx.tree_at(lambda e: e.y, end, y)
 
 
 def solve_recorded(
@@ -118,7 +134,7 @@ def solve_recorded(
     h0,
     max_step: Callable,
     max_steps: int,
-    secant_iterations: int = 32,
+    bracket_iterations: int = 64,
 ) -> PhaseEnd:
     """Integrate `field(t, y, args, recording)` from `t0` until `event(t, y, f, args,
     recording)`, positive at the start, falls to zero.
@@ -126,7 +142,12 @@ def solve_recorded(
     `record(t, y, f, args)` gives the sample appended to `recording` after each accepted
     step (and at the start); `max_step(t, y, f, args, recording)` bounds the step, for
     example so that a delayed lookup never reaches past the recorded history. An event
-    that is not positive at the start ends the phase there, after no step.
+    that is not positive at the start ends the phase there, after no step. A spent step
+    budget is flagged (`complete`), not raised: see `require_complete`.
+
+    The loop carries the recording as an in-place buffer (`equinox.internal.while_loop`):
+    under `vmap`, lax's while loop would select every member's whole buffer at every step,
+    and the cost of a step would grow with the buffer's capacity.
     """
     f0 = field(t0, y0, args, recording)
     recording = recording.append(record(t0, y0, f0, args))
@@ -171,12 +192,9 @@ def solve_recorded(
         jnp.zeros((), jnp.int32),
         ended_at_start,
     )
-    t, y, f, h, recording, steps, crossed = jax.lax.while_loop(cond, body, start)
-    # On y, which every caller uses: an error on an unused output would be dropped.
-    y = eqx.error_if(
-        y, ~crossed, "the step budget (max_steps) was spent before the phase ended: raise max_steps"
+    t, y, f, h, recording, steps, crossed = eqxi.while_loop(
+        cond, body, start, kind="lax", buffers=lambda carry: carry[4].samples
     )
-
     # The crossing lies within (t, t + h]: Illinois regula falsi on the step length, on
     # the primal alone (the derivative comes from the implicit function theorem below).
     # Its accuracy need only be enough for the Newton correction that follows, whose
@@ -189,23 +207,27 @@ def solve_recorded(
     primal_event = lambda length: event_after(length, *primal)
 
     def unresolved(state):
-        lo, _, hi, e_hi, iteration = state
+        lo, _, hi, e_hi, _, iteration = state
         wide = jnp.abs(hi - lo) > _BRACKET_TOLERANCE * jnp.abs(h)
-        return wide & (e_hi != 0.0) & (iteration < secant_iterations)
+        return wide & (e_hi != 0.0) & (iteration < bracket_iterations)
 
     def illinois(state):
-        lo, e_lo, hi, e_hi, iteration = state
+        lo, e_lo, hi, e_hi, width_before, iteration = state
         moved = e_hi != e_lo  # converged to rounding: stay
-        mid = hi - e_hi * (hi - lo) / jnp.where(moved, e_hi - e_lo, 1.0)
+        width = jnp.abs(hi - lo)
+        secant = hi - e_hi * (hi - lo) / jnp.where(moved, e_hi - e_lo, 1.0)
+        # Regula falsi crawls on a kinked event (the minimum of several): bisect after an
+        # iteration that failed to halve the bracket.
+        mid = jnp.where(width > 0.5 * width_before, 0.5 * (lo + hi), secant)
         mid = jnp.where(moved, mid, hi)
         e_mid = primal_event(mid)
         same_side = (e_mid > 0.0) == (e_hi > 0.0)
         lo, e_lo = jnp.where(same_side, lo, hi), jnp.where(same_side, 0.5 * e_lo, e_hi)
-        return lo, e_lo, mid, e_mid, iteration + 1
+        return lo, e_lo, mid, e_mid, width, iteration + 1
 
     h = jax.lax.stop_gradient(h)
-    start = (jnp.zeros_like(h), event(*primal), h, primal_event(h), 0)
-    _, _, length, _, _ = jax.lax.while_loop(unresolved, illinois, start)
+    start = (jnp.zeros_like(h), event(*primal), h, primal_event(h), jnp.full_like(h, jnp.inf), 0)
+    _, _, length, _, _, _ = jax.lax.while_loop(unresolved, illinois, start)
     # The derivative, by the implicit function theorem: one Newton correction whose slope
     # carries no derivative.
     value, slope = jax.jvp(
@@ -218,4 +240,4 @@ def solve_recorded(
     length = jnp.where(ended_at_start, 0.0, length)
     y_end, _, f_end = _step(field, t, y, f, length, args, recording)
     recording = recording.append(record(t + length, y_end, f_end, args))
-    return PhaseEnd(t=t + length, y=y_end, derivative=f_end, recording=recording, steps=steps)
+    return PhaseEnd(t + length, y_end, f_end, recording, steps, crossed)

@@ -73,13 +73,14 @@ import functools
 import math
 
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
 from .. import _checks
 from .._custom_types import Scalar
-from .._solve.recorded_rk import PhaseEnd, Recording, solve_recorded
+from .._solve.recorded_rk import PhaseEnd, Recording, require_complete, solve_recorded
 from .._solve.sensitivity import forward_jacobian_jvp
 
 # --------------------------------------------------------------------------------------
@@ -176,9 +177,9 @@ def _slope_memory(recording: Recording, x, segment):
     `segment = (first, last)` bounds the recorded interval used, so that a lookup at a
     jump of Psi' (recorded twice, left and right limits) takes the side the load is on
     whatever the rounding of x."""
-    h = recording.samples["hinge"]
-    phi = recording.samples["rotation"]
-    slope = recording.samples["curvature"]
+    h = recording.samples["hinge"][:]
+    phi = recording.samples["rotation"][:]
+    slope = recording.samples["curvature"][:]
     first, last = segment
     last = jnp.minimum(last, recording.count - 1)
     i = jnp.searchsorted(h, x, side="right").astype(last.dtype) - 1
@@ -547,16 +548,18 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
         )
 
     # (`derivative` is a placeholder of the right structure: no segment reads it.)
-    initial = PhaseEnd(first.t, start, start, recording, first.steps)
+    initial = PhaseEnd(first.t, start, start, recording, first.steps, first.complete)
     steps = jnp.zeros((), jnp.int32)
     carry = (initial, p, pending, jnp.zeros((), int_), steps, jnp.asarray(True))
-    end, p, _, _, steps, _ = jax.lax.while_loop(
-        lambda c: c[-1] & (c[-2] < max_steps), segment, carry
+    end, p, _, _, steps, _ = eqxi.while_loop(
+        lambda c: c[-1] & (c[-2] < max_steps),
+        segment,
+        carry,
+        kind="lax",
+        buffers=lambda c: c[0].recording.samples,
     )
-    end = eqx.error_if(
-        end, steps >= max_steps, "contact phase: the step budget (max_steps) was spent: raise it"
-    )
-    return end, p
+    end = eqx.tree_at(lambda e: e.complete, end, end.complete & (steps < max_steps))
+    return require_complete(end, "contact phase"), p
 
 
 # The contact phase stops where S1 falls to this fraction of S*: there the load has caught
@@ -618,6 +621,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         max_step=_lookup_bound(lambda y: y.vehicle_tangential),
         max_steps=max_steps,
     )
+    first = require_complete(first, "moving load" if moving_load else "crushing phase")
     if moving_load:
         return p, first, None, None
     y = first.y
@@ -689,6 +693,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         lambda s, y, f, p, r: y.log_v0 - free_rest,
         max_steps,
     )
+    third = require_complete(third, "free phase")
     return p, first, second, (third, separated, theta_end)
 
 
