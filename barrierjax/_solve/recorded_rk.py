@@ -207,27 +207,33 @@ def solve_recorded(
     primal_event = lambda length: event_after(length, *primal)
 
     def unresolved(state):
-        lo, _, hi, e_hi, _, iteration = state
+        lo, _, hi, e_hi, _, _, iteration = state
         wide = jnp.abs(hi - lo) > _BRACKET_TOLERANCE * jnp.abs(h)
         return wide & (e_hi != 0.0) & (iteration < bracket_iterations)
 
     def illinois(state):
-        lo, e_lo, hi, e_hi, width_before, iteration = state
+        lo, e_lo, hi, e_hi, width_before, width_two_before, iteration = state
         moved = e_hi != e_lo  # converged to rounding: stay
         width = jnp.abs(hi - lo)
         secant = hi - e_hi * (hi - lo) / jnp.where(moved, e_hi - e_lo, 1.0)
-        # Regula falsi crawls on a kinked event (the minimum of several): bisect after an
-        # iteration that failed to halve the bracket.
-        mid = jnp.where(width > 0.5 * width_before, 0.5 * (lo + hi), secant)
+        # Regula falsi crawls on a kinked event (the minimum of several): bisect where two
+        # iterations failed to halve the bracket.
+        mid = jnp.where(width > 0.5 * width_two_before, 0.5 * (lo + hi), secant)
         mid = jnp.where(moved, mid, hi)
         e_mid = primal_event(mid)
         same_side = (e_mid > 0.0) == (e_hi > 0.0)
         lo, e_lo = jnp.where(same_side, lo, hi), jnp.where(same_side, 0.5 * e_lo, e_hi)
-        return lo, e_lo, mid, e_mid, width, iteration + 1
+        return lo, e_lo, mid, e_mid, width, width_before, iteration + 1
 
     h = jax.lax.stop_gradient(h)
-    start = (jnp.zeros_like(h), event(*primal), h, primal_event(h), jnp.full_like(h, jnp.inf), 0)
-    _, _, length, _, _, _ = jax.lax.while_loop(unresolved, illinois, start)
+    e_start, e_end = event(*primal), primal_event(h)
+    # No bracket (the phase ended at its start, or never reached its event): no iteration,
+    # where under vmap an aimless one would hold up the whole batch.
+    bracketed = crossed & (e_start > 0.0) & (e_end <= 0.0)
+    iteration = jnp.where(bracketed, 0, bracket_iterations)
+    unknown = jnp.full_like(h, jnp.inf)
+    start = (jnp.zeros_like(h), e_start, h, e_end, unknown, unknown, iteration)
+    _, _, length, _, _, _, _ = jax.lax.while_loop(unresolved, illinois, start)
     # The derivative, by the implicit function theorem: one Newton correction whose slope
     # carries no derivative.
     value, slope = jax.jvp(

@@ -170,6 +170,24 @@ def _beam_kinetic_energy(v0, s1, s2):
     return v0**2 * (s1 + s2) / 6.0
 
 
+def _interval(sorted_samples, x, first, last):
+    """The i in [first, max(last - 1, first)] with sorted_samples[i] <= x <
+    sorted_samples[i + 1], clamped to the ends: bisection that reads one sample per halving
+    (a sorted search over the whole buffer would read, and under `vmap` copy, all of it)."""
+
+    def halve(_, bounds):
+        lo, hi = bounds
+        mid = (lo + hi) // 2
+        right = sorted_samples[mid] <= x
+        return jnp.where(right, mid, lo), jnp.where(right, hi, mid)
+
+    halvings = max(1, math.ceil(math.log2(sorted_samples.shape[0])))
+    lo, _ = jax.lax.fori_loop(
+        0, halvings, halve, (first, jnp.maximum(last, first))
+    )
+    return lo
+
+
 def _slope_memory(recording: Recording, x, segment):
     """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by cubic Hermite
     interpolation of the recorded (H, Phi, dPhi/dH); zero ahead of the initial hinge.
@@ -177,13 +195,12 @@ def _slope_memory(recording: Recording, x, segment):
     `segment = (first, last)` bounds the recorded interval used, so that a lookup at a
     jump of Psi' (recorded twice, left and right limits) takes the side the load is on
     whatever the rounding of x."""
-    h = recording.samples["hinge"][:]
-    phi = recording.samples["rotation"][:]
-    slope = recording.samples["curvature"][:]
+    h = recording.samples["hinge"]
+    phi = recording.samples["rotation"]
+    slope = recording.samples["curvature"]
     first, last = segment
     last = jnp.minimum(last, recording.count - 1)
-    i = jnp.searchsorted(h, x, side="right").astype(last.dtype) - 1
-    i = jnp.clip(i, first, jnp.maximum(last - 1, first))
+    i = _interval(h, x, first, last)
     interior = i + 1 <= last
     j = jnp.where(interior, i + 1, i)
     width = jnp.where(interior, h[j] - h[i], 1.0)
