@@ -1,6 +1,7 @@
 """What every benchmark script shares: collecting a failed solve's error, saving figures,
 describing the machine, and noticing a model edited on disk while a run was going."""
 
+import argparse
 import datetime
 import hashlib
 import os
@@ -87,3 +88,18 @@ def sources_changed(start: dict) -> str | None:
         + ", ".join(changed)
         + "; the run used the versions imported at its start (meta.barrierjax_sources)"
     )
+
+
+def argument_parser(doc: str) -> argparse.ArgumentParser:
+    """The options every benchmark script takes: --quick, --out, --seed, --no-plots."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="tiny smoke run")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path(__file__).resolve().parent / "results",
+        help="results folder (default benchmarks/results)",
+    )
+    parser.add_argument("--seed", type=int, default=20261122)
+    parser.add_argument("--no-plots", action="store_true")
+    return parser

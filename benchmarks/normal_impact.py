@@ -32,7 +32,6 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-import argparse
 import json
 import logging
 import math
@@ -44,7 +43,7 @@ from pathlib import Path
 import diffrax
 import jax.numpy as jnp
 import numpy as np
-from _common import drain, meta, save, source_fingerprint, sources_changed
+from _common import argument_parser, drain, meta, save, source_fingerprint, sources_changed
 
 from barrierjax.hinge import normal as _normal
 from barrierjax.hinge.normal import normal_impact
@@ -921,16 +920,7 @@ def plots(out_dir: Path, data: dict):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="tiny smoke run")
-    parser.add_argument(
-        "--out",
-        type=Path,
-        default=Path(__file__).resolve().parent / "results",
-        help="results folder (default benchmarks/results)",
-    )
-    parser.add_argument("--seed", type=int, default=20261122)
-    parser.add_argument("--no-plots", action="store_true")
+    parser = argument_parser(__doc__)
     args = parser.parse_args(argv)
     cfg = config(args.quick)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -47,7 +47,7 @@ from pathlib import Path
 
 import jax.numpy as jnp
 import numpy as np
-from _common import drain, meta, save, source_fingerprint, sources_changed
+from _common import argument_parser, drain, meta, save, source_fingerprint, sources_changed
 
 from barrierjax.hinge import normal_impact, oblique_impact
 
@@ -1100,16 +1100,7 @@ def jsonable(x):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="tiny smoke run")
-    parser.add_argument(
-        "--out",
-        type=Path,
-        default=Path(__file__).resolve().parent / "results",
-        help="results folder (default benchmarks/results)",
-    )
-    parser.add_argument("--seed", type=int, default=20261122)
-    parser.add_argument("--no-plots", action="store_true")
+    parser = argument_parser(__doc__)
     parser.add_argument("--grad-child", help=argparse.SUPPRESS)  # internal: section (c)
     args = parser.parse_args(argv)
     if args.grad_child:
