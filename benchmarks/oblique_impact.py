@@ -474,6 +474,18 @@ def fit_order(rows, floor):
 # (b) throughput against batch size.
 
 
+def timed(n, run_s, compile_s, compile_shared):
+    """A throughput row's timing fields for `n` scenarios run in `run_s` seconds."""
+    return {
+        "ok": True,
+        "batch_s": run_s,
+        "per_scenario_s": run_s / n,
+        "per_second": n / run_s,
+        "compile_s": compile_s,
+        "compile_shared": compile_shared,
+    }
+
+
 def section_throughput(cfg, seed, scenario_set):
     print(
         f"\n(b) Throughput against batch size, rtol {THROUGHPUT_RTOL:.0e} for both "
@@ -489,23 +501,11 @@ def section_throughput(cfg, seed, scenario_set):
         for model in ("oblique", "normal_ode"):
             row = dict(batch=n, rtol=THROUGHPUT_RTOL, mode="one call")
             try:
-                if model == "oblique":
-                    compiled, compile_s, reused = executable("oblique", args, THROUGHPUT_RTOL)
-                    out, run_s = run_timed(compiled, args)
-                    nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
-                else:
-                    compiled, compile_s, reused = executable("normal", args[:3], THROUGHPUT_RTOL)
-                    out, run_s = run_timed(compiled, args[:3])
-                    nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
-                row.update(
-                    ok=True,
-                    batch_s=run_s,
-                    per_scenario_s=run_s / n,
-                    per_second=n / run_s,
-                    compile_s=compile_s,
-                    compile_shared=reused,
-                    n_nonfinite=nonfinite,
-                )
+                kind, inputs = ("oblique", args) if model == "oblique" else ("normal", args[:3])
+                compiled, compile_s, reused = executable(kind, inputs, THROUGHPUT_RTOL)
+                out, run_s = run_timed(compiled, inputs)
+                nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
+                row.update(timed(n, run_s, compile_s, reused), n_nonfinite=nonfinite)
             except Exception as exc:  # noqa: BLE001 - a failure is a result
                 drain()
                 row.update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
@@ -542,14 +542,7 @@ def section_throughput(cfg, seed, scenario_set):
                     failures += 1
             run_s = time.perf_counter() - t0
             row.update(
-                ok=True,
-                batch_s=run_s,
-                per_scenario_s=run_s / n,
-                per_second=n / run_s,
-                compile_s=compile_s,
-                compile_shared=True,
-                n_nonfinite=nonfinite,
-                failed_chunks=failures,
+                timed(n, run_s, compile_s, True), n_nonfinite=nonfinite, failed_chunks=failures
             )
         else:
             row.update(ok=False, failure="no batch size succeeded")
@@ -559,14 +552,7 @@ def section_throughput(cfg, seed, scenario_set):
         try:
             compiled, compile_s, _ = executable("normal", args[:3], THROUGHPUT_RTOL)
             _, run_s = run_timed(compiled, args[:3])
-            row.update(
-                ok=True,
-                batch_s=run_s,
-                per_scenario_s=run_s / n,
-                per_second=n / run_s,
-                compile_s=compile_s,
-                compile_shared=False,
-            )
+            row.update(timed(n, run_s, compile_s, False))
         except Exception as exc:  # noqa: BLE001 - a failure is a result
             drain()
             row.update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
