@@ -1,4 +1,4 @@
-"""Smoke test of benchmarks/normal_impact.py: `--quick` runs, exits 0 and writes its JSON.
+"""Smoke tests of the benchmark scripts: `--quick` runs, exits 0 and writes its JSON.
 
 This checks that the benchmark script works, never how fast anything is (DESIGN.md: a
 benchmark is never a timed test).
@@ -14,22 +14,27 @@ import pytest
 pytest.importorskip("mpmath")
 pytest.importorskip("scipy")
 
-SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "normal_impact.py"
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def run_quick(name, out, timeout):
+    """Run benchmarks/<name>.py --quick into `out`; it must succeed and print its summary.
+    Returns the JSON it wrote."""
+    proc = subprocess.run(
+        [sys.executable, str(BENCHMARKS / f"{name}.py"), "--quick", "--out", str(out)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert "SUMMARY" in proc.stdout
+    return json.loads((out / f"{name}.json").read_text())
 
 
 def test_normal_impact_benchmark_quick(tmp_path):
     out = tmp_path / "results"
-    proc = subprocess.run(
-        [sys.executable, str(SCRIPT), "--quick", "--out", str(out)],
-        check=False,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert "SUMMARY" in proc.stdout
-
-    data = json.loads((out / "normal_impact.json").read_text())
+    data = run_quick("normal_impact", out, timeout=120)
     for section in (
         "meta",
         "scenarios",
@@ -63,24 +68,11 @@ def test_normal_impact_benchmark_quick(tmp_path):
         assert (out / name).stat().st_size > 0
 
 
-OBLIQUE_SCRIPT = SCRIPT.parent / "oblique_impact.py"
-
-
 def test_oblique_impact_benchmark_quick(tmp_path):
     # Two oblique compilations (30-75 s each on 2 shared cores) dominate; the gradient section
     # only exercises its guarded child process, which the quick run stops after 15 s.
     out = tmp_path / "results"
-    proc = subprocess.run(
-        [sys.executable, str(OBLIQUE_SCRIPT), "--quick", "--out", str(out)],
-        check=False,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert "SUMMARY" in proc.stdout
-
-    data = json.loads((out / "oblique_impact.json").read_text())
+    data = run_quick("oblique_impact", out, timeout=600)
     for section in (
         "meta",
         "scenarios",
