@@ -195,6 +195,7 @@ def solve_recorded(
     t, y, f, h, recording, steps, crossed = eqxi.while_loop(
         cond, body, start, kind="lax", buffers=lambda carry: carry[4].samples
     )
+
     # The crossing lies within (t, t + h]: Illinois regula falsi on the step length, on
     # the primal alone (the derivative comes from the implicit function theorem below).
     # Its accuracy need only be enough for the Newton correction that follows, whose

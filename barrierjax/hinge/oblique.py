@@ -172,8 +172,8 @@ def _beam_kinetic_energy(v0, s1, s2):
 
 def _interval(sorted_samples, x, first, last):
     """The i in [first, max(last - 1, first)] with sorted_samples[i] <= x <
-    sorted_samples[i + 1], clamped to the ends: bisection that reads one sample per halving
-    (a sorted search over the whole buffer would read, and under `vmap` copy, all of it)."""
+    sorted_samples[i + 1], clamped to the ends: bisection within the segment's samples,
+    reading one sample per halving."""
 
     def halve(_, bounds):
         lo, hi = bounds
@@ -182,9 +182,7 @@ def _interval(sorted_samples, x, first, last):
         return jnp.where(right, mid, lo), jnp.where(right, hi, mid)
 
     halvings = max(1, math.ceil(math.log2(sorted_samples.shape[0])))
-    lo, _ = jax.lax.fori_loop(
-        0, halvings, halve, (first, jnp.maximum(last, first))
-    )
+    lo, _ = jax.lax.fori_loop(0, halvings, halve, (first, jnp.maximum(last, first)))
     return lo
 
 
