@@ -4,11 +4,12 @@ past, recorded in a fixed-size buffer.
 diffrax vector fields see only the current state, but a state-dependent delay (the slope
 under a moving load, report 3.3) needs the solution at an earlier, state-dependent time.
 This loop records one sample per accepted step into a buffer carried in the loop state
-and hands the buffer to the vector field. A phase ends where a real-valued event function
-falls to zero: the crossing step is retaken with the length that puts the event exactly
-on zero (safeguarded regula falsi on the step length, then one Newton correction), so the
-phase's end carries an exact gradient. Differentiate in forward mode
-(`sensitivity.forward_jacobian_jvp`): the loops are while loops.
+and hands the vector field a view of it, taken once per step (for example the few samples
+around the current state, so that the stages read no more than that). A phase ends where
+a real-valued event function falls to zero: the crossing step is retaken with the length
+that puts the event exactly on zero (safeguarded regula falsi on the step length, then one
+Newton correction), so the phase's end carries an exact gradient. Differentiate in
+forward mode (`sensitivity.forward_jacobian_jvp`): the loops are while loops.
 """
 
 from collections.abc import Callable
@@ -77,10 +78,10 @@ def _combine(y, h, weights, ks):
     )
 
 
-def _step(field, t, y, f0, h, args, recording):
+def _step(field, t, y, f0, h, args, past):
     ks = [f0]
     for c, a in zip(_C[1:], _A[1:]):
-        ks.append(field(t + c * h, _combine(y, h, a, ks), args, recording))
+        ks.append(field(t + c * h, _combine(y, h, a, ks), args, past))
     y1 = _combine(y, h, _A[6], ks[:6])
     error = _combine(jax.tree.map(jnp.zeros_like, y), h, _B_ERROR, ks)
     return y1, error, ks[6]
@@ -134,14 +135,17 @@ def solve_recorded(
     h0,
     max_step: Callable,
     max_steps: int,
+    view: Callable = lambda t, y, args, recording: recording,
     bracket_iterations: int = 64,
 ) -> PhaseEnd:
-    """Integrate `field(t, y, args, recording)` from `t0` until `event(t, y, f, args,
-    recording)`, positive at the start, falls to zero.
+    """Integrate `field(t, y, args, past)` from `t0` until `event(t, y, f, args, past)`,
+    positive at the start, falls to zero.
 
-    `record(t, y, f, args)` gives the sample appended to `recording` after each accepted
-    step (and at the start); `max_step(t, y, f, args, recording)` bounds the step, for
-    example so that a delayed lookup never reaches past the recorded history. An event
+    `past = view(t, y, args, recording)` is taken at the start of each step and serves
+    every stage of it (by default the whole recording). `record(t, y, f, args)` gives the
+    sample appended to `recording` after each accepted step (and at the start);
+    `max_step(t, y, f, args, past)` bounds the step, for example so that the stages never
+    read past what `past` holds. An event
     that is not positive at the start ends the phase there, after no step. A spent step
     budget is flagged (`complete`), not raised: see `require_complete`.
 
@@ -149,10 +153,11 @@ def solve_recorded(
     under `vmap`, lax's while loop would select every member's whole buffer at every step,
     and the cost of a step would grow with the buffer's capacity.
     """
-    f0 = field(t0, y0, args, recording)
+    past = view(t0, y0, args, recording)
+    f0 = field(t0, y0, args, past)
     recording = recording.append(record(t0, y0, f0, args))
     dtype = jnp.result_type(t0)
-    ended_at_start = event(t0, y0, f0, args, recording) <= 0.0
+    ended_at_start = event(t0, y0, f0, args, past) <= 0.0
 
     def cond(carry):
         *_, steps, crossed = carry
@@ -161,12 +166,13 @@ def solve_recorded(
     def body(carry):
         t, y, f, h, rec, steps, _ = carry
         # Step lengths are a discretisation choice: no derivative flows through them.
-        h = jax.lax.stop_gradient(jnp.minimum(h, max_step(t, y, f, args, rec)))
-        y1, error, f1 = _step(field, t, y, f, h, args, rec)
+        past = view(t, y, args, rec)
+        h = jax.lax.stop_gradient(jnp.minimum(h, max_step(t, y, f, args, past)))
+        y1, error, f1 = _step(field, t, y, f, h, args, past)
         ratio = _error_ratio(y, y1, error, rtol, atol)
         finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(y1)]))
         accept = (ratio <= 1.0) & finite
-        crossed = accept & (event(t + h, y1, f1, args, rec) <= 0.0)
+        crossed = accept & (event(t + h, y1, f1, args, past) <= 0.0)
         advance = accept & ~crossed
         new_rec = rec.append(record(t + h, y1, f1, args), when=advance)
         keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(advance, a, b), new, old)
@@ -200,11 +206,12 @@ def solve_recorded(
     # the primal alone (the derivative comes from the implicit function theorem below).
     # Its accuracy need only be enough for the Newton correction that follows, whose
     # error is the square of it.
-    def event_after(length, t, y, f, args, recording):
-        y1, _, f1 = _step(field, t, y, f, length, args, recording)
-        return event(t + length, y1, f1, args, recording)
+    def event_after(length, t, y, f, args, past):
+        y1, _, f1 = _step(field, t, y, f, length, args, past)
+        return event(t + length, y1, f1, args, past)
 
-    primal = jax.lax.stop_gradient((t, y, f, args, recording))
+    past = view(t, y, args, recording)
+    primal = jax.lax.stop_gradient((t, y, f, args, past))
     primal_event = lambda length: event_after(length, *primal)
 
     def unresolved(state):
@@ -238,13 +245,13 @@ def solve_recorded(
     # The derivative, by the implicit function theorem: one Newton correction whose slope
     # carries no derivative.
     value, slope = jax.jvp(
-        lambda length: event_after(length, t, y, f, args, recording),
+        lambda length: event_after(length, t, y, f, args, past),
         (length,),
         (jnp.ones_like(length),),
     )
     slope = jax.lax.stop_gradient(slope)
     length = length - value / jnp.where(slope != 0.0, slope, 1.0)
     length = jnp.where(ended_at_start, 0.0, length)
-    y_end, _, f_end = _step(field, t, y, f, length, args, recording)
+    y_end, _, f_end = _step(field, t, y, f, length, args, past)
     recording = recording.append(record(t + length, y_end, f_end, args))
     return PhaseEnd(t + length, y_end, f_end, recording, steps, crossed)

@@ -186,41 +186,84 @@ def _interval(sorted_samples, x, first, last):
     return lo
 
 
-def _slope_memory(recording: Recording, x, segment):
+# The samples of the right hinge's trace that one step of the load may read: the step is
+# bounded to stay within them (`_lookup_bound`). A step of the load crosses about as many
+# samples as a step of the hinge records, one.
+_WINDOW = 8
+
+
+class _Past(eqx.Module):
+    """What a step reads of the right hinge's recorded trace: `_WINDOW` consecutive
+    samples (H, Phi, dPhi/dH) from `start`, the segment's bounds (`_Params.segment`), the
+    trace's first position S* and `reach`, the furthest position the window covers."""
+
+    hinge: Float[Array, " window"]
+    rotation: Float[Array, " window"]
+    curvature: Float[Array, " window"]
+    start: Int[Array, ""]
+    first: Int[Array, ""]
+    last: Int[Array, ""]
+    first_hinge: Scalar
+    reach: Scalar
+
+
+def _past(t, y, p, recording: Recording) -> _Past:
+    """The window of the trace from the interval holding the load, found once per step."""
+    h = recording.samples["hinge"]
+    first, last = p.segment
+    recorded = jnp.maximum(recording.count - 1, 0)
+    last = jnp.minimum(last, recorded)
+    start = jnp.minimum(_interval(h, y.position, first, last), h.shape[0] - _WINDOW)
+    indices = start + jnp.arange(_WINDOW, dtype=start.dtype)
+    window = {name: recording.samples[name][indices] for name in _MEMORY}
+    return _Past(
+        **window,
+        start=start,
+        first=first,
+        last=last,
+        first_hinge=h[0],
+        reach=h[jnp.minimum(start + _WINDOW - 1, recorded)],
+    )
+
+
+def _slope_memory(past: _Past, x):
     """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by cubic Hermite
     interpolation of the recorded (H, Phi, dPhi/dH); zero ahead of the initial hinge.
 
-    `segment = (first, last)` bounds the recorded interval used, so that a lookup at a
-    jump of Psi' (recorded twice, left and right limits) takes the side the load is on
-    whatever the rounding of x."""
-    h = recording.samples["hinge"]
-    phi = recording.samples["rotation"]
-    slope = recording.samples["curvature"]
-    first, last = segment
-    last = jnp.minimum(last, recording.count - 1)
-    i = _interval(h, x, first, last)
-    interior = i + 1 <= last
+    Only the segment's samples are read, so that a lookup at a jump of Psi' (recorded
+    twice, left and right limits) takes the side the load is on whatever the rounding of
+    x. The interval is picked from the window by comparison, not indexing: under `vmap` an
+    index is a gather, and gathers were most of a step's cost."""
+    offsets = jnp.arange(_WINDOW, dtype=past.start.dtype)
+    below = jnp.sum(past.hinge <= x).astype(past.start.dtype)
+    i = jnp.clip(past.start + below - 1, past.first, jnp.maximum(past.last - 1, past.first))
+    i = jnp.clip(i, past.start, past.start + _WINDOW - 2)
+    interior = i + 1 <= past.last
     j = jnp.where(interior, i + 1, i)
-    width = jnp.where(interior, h[j] - h[i], 1.0)
-    u = jnp.where(interior, (x - h[i]) / width, 0.0)
+    pick = lambda samples, k: jnp.sum(jnp.where(offsets == k - past.start, samples, 0.0))
+    h_i, h_j = pick(past.hinge, i), pick(past.hinge, j)
+    phi_i, phi_j = pick(past.rotation, i), pick(past.rotation, j)
+    slope_i, slope_j = pick(past.curvature, i), pick(past.curvature, j)
+    width = jnp.where(interior, h_j - h_i, 1.0)
+    u = jnp.where(interior, (x - h_i) / width, 0.0)
     u2, u3 = u * u, u * u * u
     hermite = (
-        (2 * u3 - 3 * u2 + 1) * phi[i]
-        + (u3 - 2 * u2 + u) * width * slope[i]
-        + (-2 * u3 + 3 * u2) * phi[j]
-        + (u3 - u2) * width * slope[j]
+        (2 * u3 - 3 * u2 + 1) * phi_i
+        + (u3 - 2 * u2 + u) * width * slope_i
+        + (-2 * u3 + 3 * u2) * phi_j
+        + (u3 - u2) * width * slope_j
     )
     hermite_slope = (
-        (6 * u2 - 6 * u) * phi[i]
-        + (3 * u2 - 4 * u + 1) * width * slope[i]
-        + (-6 * u2 + 6 * u) * phi[j]
-        + (3 * u2 - 2 * u) * width * slope[j]
+        (6 * u2 - 6 * u) * phi_i
+        + (3 * u2 - 4 * u + 1) * width * slope_i
+        + (-6 * u2 + 6 * u) * phi_j
+        + (3 * u2 - 2 * u) * width * slope_j
     ) / width
     # Past the last sample (only within a step, which max_step keeps short): linear.
-    beyond = phi[i] + slope[i] * (x - h[i])
+    beyond = phi_i + slope_i * (x - h_i)
     psi = jnp.where(interior, hermite, beyond)
-    dpsi = jnp.where(interior, hermite_slope, slope[i])
-    ahead = x < h[0]
+    dpsi = jnp.where(interior, hermite_slope, slope_i)
+    ahead = x < past.first_hinge
     return jnp.where(ahead, 0.0, psi), jnp.where(ahead, 0.0, dpsi)
 
 
@@ -279,7 +322,7 @@ def _friction_deceleration(vh, force, p: _Params):
     return jnp.where(vh > 0.0, p.friction * force / p.mu, 0.0)
 
 
-def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
+def _crushing_field(t, y: _Crushing, p: _Params, past: _Past) -> _Crushing:
     vh = jnp.maximum(y.vehicle_tangential, 0.0)
     force = p.phi
     dv0 = _acceleration(y.s1, y.s2, force)
@@ -288,7 +331,7 @@ def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
     safe_v0 = jnp.where(moving, y.v0, 1.0)
     # At V0 = 0 (T = 0 only) the 0/0 limit: the antisymmetric mode of the linearisation.
     start = -1.5 * dv0 * vh / (dv0 + 0.5 + p.phi / p.s_star)
-    psi, _ = _slope_memory(recording, y.position, p.segment)
+    psi, _ = _slope_memory(past, y.position)
     theta = psi - y.rotation
     contact_velocity = y.v0 + theta * vh
     backing, hinge = _beam_powers(y.v0, y.s1, y.s2)
@@ -310,11 +353,11 @@ def _crushing_field(t, y: _Crushing, p: _Params, recording) -> _Crushing:
     )
 
 
-def _contact_force(y: _Sliding, p: _Params, recording):
+def _contact_force(y: _Sliding, p: _Params, past: _Past):
     """(force ratio, slope under the load): (3.3.20)-(3.3.22) solved for the force."""
     v0 = jnp.exp(y.log_v0)
     vh = jnp.maximum(y.vehicle_tangential, 0.0)
-    psi, curvature = _slope_memory(recording, y.position, p.segment)
+    psi, curvature = _slope_memory(past, y.position)
     theta = psi - y.rotation
     s1, s2 = y.s1, y.s2
     numerator = (
@@ -325,11 +368,11 @@ def _contact_force(y: _Sliding, p: _Params, recording):
 
 
 def _sliding_field(in_contact: bool):
-    def field(s, y: _Sliding, p: _Params, recording) -> _Sliding:
+    def field(s, y: _Sliding, p: _Params, past: _Past) -> _Sliding:
         v0 = jnp.exp(y.log_v0)
         vh = jnp.maximum(y.vehicle_tangential, 0.0)
         if in_contact:
-            force, theta = _contact_force(y, p, recording)
+            force, theta = _contact_force(y, p, past)
             load_speed = vh
         else:
             force, theta, load_speed = 0.0, 0.0, 0.0
@@ -470,13 +513,12 @@ def _empty_recording(capacity, dtype, history):
 
 
 def _lookup_bound(rate_of_position):
-    """A step bound keeping the load's position within the recorded trace of the hinge:
-    at most half the gap between the load and the last recorded hinge position."""
+    """A step bound keeping the load's position within the step's window of the hinge's
+    trace: at most half the gap between the load and the window's reach."""
 
-    def max_step(t, y, f, p, recording):
-        last = recording.samples["hinge"][recording.count - 1]
+    def max_step(t, y, f, p, past: _Past):
         rate = rate_of_position(y)
-        gap = jnp.maximum(last - y.position, 0.0)
+        gap = jnp.maximum(past.reach - y.position, 0.0)
         return jnp.where(rate > 0.0, 0.5 * gap / jnp.where(rate > 0.0, rate, 1.0), jnp.inf)
 
     return max_step
@@ -544,12 +586,12 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
         end, p, pending, behind, steps, _ = carry
         position, left, right = pending.head()
         p = eqx.tree_at(lambda p: p.segment, p, (behind, left))
-        event = lambda s, y, f, p, r: jnp.minimum(
-            contact_event(s, y, f, p, r), position - y.position
+        event = lambda s, y, f, p, past: jnp.minimum(
+            contact_event(s, y, f, p, past), position - y.position
         )
         end = sliding(True, end.y, end.recording, p, event, max_steps - steps)
         crossed = position - end.y.position < contact_event(
-            0.0, end.y, end.derivative, p, end.recording
+            0.0, end.y, end.derivative, p, _past(0.0, end.y, p, end.recording)
         )
         created = pending.pop_and_push(end.y.position + end.y.s1, end.recording.count - 1)
         keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(crossed, a, b), new, old)
@@ -619,9 +661,9 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         slope_work=zero,
     )
     if moving_load:
-        event = lambda t, y, f, p, r: t_end - t
+        event = lambda t, y, f, p, past: t_end - t
     else:
-        event = lambda t, y, f, p, r: y.vehicle_normal - f.contact_displacement
+        event = lambda t, y, f, p, past: y.vehicle_normal - f.contact_displacement
     first = solve_recorded(
         _crushing_field,
         crushing,
@@ -635,6 +677,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         h0=1e-2 * time_scale * rtol**0.2,
         max_step=_lookup_bound(lambda y: y.vehicle_tangential),
         max_steps=max_steps,
+        view=_past,
     )
     first = require_complete(first, "moving load" if moving_load else "crushing phase")
     if moving_load:
@@ -657,16 +700,21 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     )
     log_rest = jnp.log(y.v0) + math.log(rtol) - 3.0
 
-    def contact_event(s, y, f, p, r):
-        force, _ = _contact_force(y, p, r)
+    def contact_event(s, y, f, p, past):
+        force, _ = _contact_force(y, p, past)
         overtaking = y.s1 / p.s_star - _OVERTAKEN
         return jnp.minimum(jnp.minimum(force / p.phi, y.log_v0 - log_rest), overtaking)
 
     lookup_bound = _lookup_bound(lambda y: jnp.exp(y.log_v0) * y.vehicle_tangential)
 
+    def max_step(in_contact, s, y, f, p, past):
+        bound = _EFOLDS_PER_STEP / jnp.abs(f.log_v0)
+        # After separation the load stands still and the memory is not read.
+        return jnp.minimum(bound, lookup_bound(s, y, f, p, past)) if in_contact else bound
+
     def sliding(in_contact, start, recording, p, event, budget):
         field = _sliding_field(in_contact)
-        rate = field(zero, start, p, recording).log_v0
+        rate = field(zero, start, p, _past(zero, start, p, recording)).log_v0
         return solve_recorded(
             field,
             start,
@@ -678,14 +726,15 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
             rtol=rtol,
             atol=atol,
             h0=1e-2 * rtol**0.2 / jnp.abs(rate),
-            max_step=lambda s, y, f, p, r: jnp.minimum(
-                lookup_bound(s, y, f, p, r), _EFOLDS_PER_STEP / jnp.abs(f.log_v0)
-            ),
+            max_step=functools.partial(max_step, in_contact),
             max_steps=budget,
+            view=_past,
         )
 
     second, p_end = _contact_segments(sliding, contact, first, p, contact_event, max_steps)
-    force_end, theta_end = _contact_force(second.y, p_end, second.recording)
+    force_end, theta_end = _contact_force(
+        second.y, p_end, _past(zero, second.y, p_end, second.recording)
+    )
     separated = force_end / phi < second.y.log_v0 - log_rest
     overtaken = second.y.s1 / s_star < 2.0 * _OVERTAKEN
     separated = eqx.error_if(
@@ -705,7 +754,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         free_start,
         second.recording,
         p,
-        lambda s, y, f, p, r: y.log_v0 - free_rest,
+        lambda s, y, f, p, past: y.log_v0 - free_rest,
         max_steps,
     )
     third = require_complete(third, "free phase")
