@@ -187,12 +187,12 @@ def test_usage(capsys):
 
 
 def test_figures_writes_the_files(capsys, tmp_path):
-    """The figures of 3.2 and 3.3.3 (the moving load, ~15 s); 3.3.4-3.3.6 share one
+    """The figures of 3.2, 3.3.3 (the moving load, ~15 s) and 3.4; 3.3.4-3.3.6 share one
     compile of the oblique model (~70 s on 2 cores) and are left to the registry test."""
-    numbers = ["3.2.2", "3.2.3", "3.2.4", "3.3.3"]
+    numbers = ["3.2.2", "3.2.3", "3.2.4", "3.3.3", "3.4.2", "3.4.3", "3.4.4", "3.4.5"]
     status, out, err = run(capsys, "figures", "--out", str(tmp_path), "--only", *numbers)
     assert status == 0
-    names = ["fig_3_2_2.png", "fig_3_2_3.png", "fig_3_2_4.png", "fig_3_3_3.png"]
+    names = [f"fig_{number.replace('.', '_')}.png" for number in numbers]
     assert out.split() == [str(tmp_path / name) for name in names]
     for name in names:
         path = tmp_path / name
@@ -213,7 +213,8 @@ def test_oblique_figures_registered():
     from barrierjax import figures
 
     assert list(figures.FIGURES) == [
-        "3.2.2", "3.2.3", "3.2.4", "3.3.3", "3.3.4", "3.3.5", "3.3.6"
+        "3.2.2", "3.2.3", "3.2.4", "3.3.3", "3.3.4", "3.3.5", "3.3.6",
+        "3.4.2", "3.4.3", "3.4.4", "3.4.5",
     ]
     assert figures.FIGURES["3.3.6"].caption == "Barrier Displacement Pattern"
     assert figures.FIGURES["3.3.6"].printed

@@ -2,6 +2,7 @@
 
 from .normal import NormalImpact, NormalImpactHistory, normal_impact
 from .oblique import MovingLoad, ObliqueImpact, ObliqueImpactHistory, moving_load, oblique_impact
+from .static_collapse import StaticLoadDeflection, static_load_deflection
 
 __all__ = [
     "MovingLoad",
@@ -9,7 +10,9 @@ __all__ = [
     "NormalImpactHistory",
     "ObliqueImpact",
     "ObliqueImpactHistory",
+    "StaticLoadDeflection",
     "moving_load",
     "normal_impact",
     "oblique_impact",
+    "static_load_deflection",
 ]
