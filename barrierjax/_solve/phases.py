@@ -9,8 +9,9 @@ give a zero one).
 import diffrax
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import optimistix as optx
-from jaxtyping import Array, Float, Int, PyTree
+from jaxtyping import Array, Bool, Float, Int, PyTree
 
 
 class PhaseSolution(eqx.Module):
@@ -20,6 +21,7 @@ class PhaseSolution(eqx.Module):
     t_end: Float[Array, ""]
     y_end: PyTree[Float[Array, ""]]
     num_steps: Int[Array, ""]
+    switched: Bool[Array, ""]
     dense: diffrax.Solution | None
 
 
@@ -36,12 +38,15 @@ def solve_phase(
     atol: float,
     dense: bool = False,
     max_steps: int = 4096,
+    switch_required: bool = True,
 ) -> PhaseSolution:
     """Integrate `vector_field(t, y, args)` from `t0` until `switch(t, y, args)` crosses
     zero, or to `t_bound` when there is no switch.
 
     With a switch, `t_bound` must lie beyond it; reaching it without switching is an
-    error (raised at run time with `equinox.error_if`), never a silent truncation.
+    error (raised at run time with `equinox.error_if`), never a silent truncation, unless
+    `switch_required` is False: the phase then ends at the first of the two, and
+    `switched` says which.
     """
     event = None
     if switch is not None:
@@ -70,7 +75,8 @@ def solve_phase(
         throw=True,
     )
     t_end = solution.ts[-1]
-    if switch is not None:
+    switched = jnp.asarray(False) if switch is None else solution.event_mask
+    if switch is not None and switch_required:
         t_end = eqx.error_if(
             t_end,
             ~solution.event_mask,
@@ -80,5 +86,6 @@ def solve_phase(
         t_end=t_end,
         y_end=jax.tree.map(lambda y: y[-1], solution.ys),
         num_steps=solution.stats["num_steps"],
+        switched=switched,
         dense=solution if dense else None,
     )

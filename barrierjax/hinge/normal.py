@@ -71,6 +71,7 @@ from .._custom_types import Scalar, Vector
 from .._solve.phases import solve_phase
 from .._solve.quadrature import gauss_legendre, jacobi_product_nodes, jacobi_product_weights
 from .._solve.sensitivity import forward_jacobian_jvp
+from .axial import axial_beam_stage
 
 
 class NormalImpactHistory(eqx.Module):
@@ -102,7 +103,10 @@ class NormalImpact(eqx.Module):
     - `s_final, t_final, w_final`: final hinge distance (alpha), time of rest (T**) and
       final displacement under the vehicle;
     - `crush_work, backing_work, hinge_work`: where the vehicle's kinetic energy
-      mu V0^2 / 2 went, in units of P_b L;
+      mu V0^2 / 2 went, in units of P_b L (with axial force the hinge work includes the
+      hinges' stretching, N times the beam's elongation);
+    - `t_string`: with axial force (report 3.4), the time at which N reaches N0 and the
+      beam becomes a plastic string; `inf` if it never does (and always without);
     - `history`: a `NormalImpactHistory`, or None when not requested.
 
     With force ratio <= 1 the barrier stays rigid (no hinge: S = 0, W = 0) and the
@@ -120,6 +124,7 @@ class NormalImpact(eqx.Module):
     crush_work: Scalar
     backing_work: Scalar
     hinge_work: Scalar
+    t_string: Scalar
     history: NormalImpactHistory | None
 
 
@@ -590,6 +595,7 @@ def _rigid_barrier(mu, phi, speed, n_history) -> NormalImpact:
         crush_work=phi * damage,
         backing_work=zero,
         hinge_work=zero,
+        t_string=zero + jnp.inf,
         history=history,
     )
 
@@ -647,9 +653,43 @@ def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
         crush_work=safe_phi * damage * speed**2,
         backing_work=final["backing_work"] * speed**2,
         hinge_work=final["hinge_work"] * speed**2,
+        t_string=jnp.full_like(mu, jnp.inf),
         history=history,
     )
     rigid = _rigid_barrier(mu, phi, speed, n_history)
+    return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+
+
+@functools.partial(jax.jit, static_argnames=("rtol",))
+def _normal_impact_axial(mu, phi, speed, eta0, *, rtol):
+    """With axial force (report 3.4, `axial.py`): the beam stage by time integration; in
+    the speed-free variables the speed enters through eta0 V^2."""
+    yields = phi > 1.0
+    safe_phi = jnp.where(yields, phi, 2.0)
+    stage = forward_jacobian_jvp(functools.partial(axial_beam_stage, rtol=rtol))
+    r = stage(mu, safe_phi, eta0 * speed**2)
+    t_string = eqx.error_if(
+        r["t_string"] * speed,
+        jnp.isfinite(r["t_string"]) & yields,
+        "axial_ratio: N reaches N0 and the beam becomes a plastic string (report 3.4.45) "
+        "before it comes to rest; the string stage is not solved yet",
+    )
+    result = NormalImpact(
+        s_star=r["s_star"],
+        t_star=r["t_star"] * speed,
+        v_star=r["v_star"] * speed,
+        w_star=r["w_star"] * speed**2,
+        damage=r["damage"] * speed**2,
+        s_final=r["s_final"],
+        t_final=r["t_final"] * speed,
+        w_final=r["w_final"] * speed**2,
+        crush_work=safe_phi * r["damage"] * speed**2,
+        backing_work=r["backing_work"] * speed**2,
+        hinge_work=(r["bending_work"] + r["stretching_work"]) * speed**2,
+        t_string=t_string,
+        history=None,
+    )
+    rigid = _rigid_barrier(mu, phi, speed, 0)
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
 
 
@@ -662,6 +702,7 @@ def normal_impact(
     rtol: float = 1e-8,
     n_history: int = 0,
     solver: diffrax.AbstractSolver | None = None,
+    axial_ratio=None,
 ) -> NormalImpact:
     """Normal impact of a rigid-plastic vehicle on a rigid-plastic beam on a rigid-plastic
     backing (report 3.2), in the report's dimensionless variables.
@@ -678,6 +719,11 @@ def normal_impact(
     - `rtol`: relative tolerance: of the ODE solver, or the target of the quadrature.
     - `n_history`: number of saved samples per phase (0: none, the cheapest).
     - `solver`: diffrax solver for `method="ode"` (default `diffrax.Tsit5()`).
+    - `axial_ratio`: eta0 = N0 / (4 (M0 q0)^1/2), the beam's yield force in tension in
+      the report's units (3.4), for a beam held against axial motion; non-negative.
+      `None` or `0` is the model of 3.2, compiled without any axial term. Otherwise the
+      beam stage of 3.4 is integrated in time (it has no closed form; `method` must be
+      `"ode"`, and `n_history` 0 for now), and `t_string` reports where N reaches N0.
 
     Scalars, or arrays of one shape (solved in cache-sized vmapped chunks: the fastest
     way to run a large sweep); `jax.vmap` and `jax.grad` work with respect to any
@@ -692,6 +738,20 @@ def normal_impact(
     mu = _checks.positive("mass_ratio", mass_ratio)
     phi = _checks.positive("force_ratio", force_ratio)
     speed = _checks.positive("speed", speed)
+    if not (axial_ratio is None or (isinstance(axial_ratio, int | float) and axial_ratio == 0)):
+        if method != "ode":
+            raise ValueError(
+                "method must be 'ode' with axial_ratio: the beam stage of report 3.4 has "
+                f"no closed form; got {method!r}"
+            )
+        if n_history:
+            raise ValueError(f"n_history must be 0 with axial_ratio (for now); got {n_history!r}")
+        eta0 = _checks.non_negative("axial_ratio", axial_ratio)
+        args = jnp.broadcast_arrays(mu, phi, speed, eta0)
+        solve = functools.partial(_normal_impact_axial, rtol=float(rtol))
+        for _ in range(args[0].ndim):
+            solve = jax.vmap(solve)
+        return solve(*args)
     mu, phi, speed = jnp.broadcast_arrays(mu, phi, speed)
     options = dict(
         method=method,

@@ -1,0 +1,124 @@
+"""Normal impact with axial force, the beam stage of report 3.4: `normal_impact(...,
+axial_ratio=eta0)`."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from barrierjax.hinge import normal_impact
+
+# (mass ratio, force ratio, speed): light, medium and heavy vehicles, weak and strong barriers.
+CASES = [(0.5, 2.0, 1.0), (5.0, 1.5, 0.3), (0.05, 8.0, 2.0), (100.0, 1.2, 1.0)]
+FIELDS = (
+    "t_star",
+    "w_star",
+    "damage",
+    "s_final",
+    "t_final",
+    "w_final",
+    "backing_work",
+    "hinge_work",
+)
+
+
+def _axial(mu, phi, v, eta0, rtol=1e-10):
+    return normal_impact(mu, phi, v, method="ode", rtol=rtol, axial_ratio=eta0)
+
+
+def test_zero_axial_ratio_is_the_model_without_axial_force():
+    mu, phi, v = (jnp.asarray(x) for x in zip(*CASES))
+    with_zero = _axial(mu, phi, v, jnp.zeros(len(CASES)), rtol=1e-12)
+    without = normal_impact(mu, phi, v, rtol=1e-12)
+    for field in FIELDS:
+        np.testing.assert_allclose(
+            getattr(with_zero, field), getattr(without, field), rtol=1e-10, err_msg=field
+        )
+    assert np.all(np.isinf(with_zero.t_string)) and np.all(np.isinf(without.t_string))
+    plain = normal_impact(mu, phi, v, rtol=1e-12, axial_ratio=0)  # 0: the 3.2 model itself
+    np.testing.assert_array_equal(plain.w_final, without.w_final)
+
+
+@pytest.mark.parametrize(
+    "case, eta0",
+    [
+        (CASES[0], 0.5),
+        (CASES[0], 2.0),
+        (CASES[0], 5.0),
+        (CASES[1], 0.5),
+        (CASES[2], 3.0),
+        (CASES[3], 0.005),
+    ],
+)
+def test_rest_on_the_cubic_and_energy_balance(case, eta0):
+    mu, phi, v = case
+    r = _axial(mu, phi, v, eta0)
+    n_final = 2.0 * eta0 * float(r.w_final)  # N/N0 = 2 eta0 W0 (3.4.33)
+    assert 0.0 < n_final < 1.0
+    k = 1.0 + n_final**2
+    s = float(r.s_final)
+    cubic = s**3 + 3 * mu * s**2 - 3 * k * s - 3 * mu * k  # (3.4.40)
+    assert abs(cubic) < 1e-8 * (s**3 + 3 * mu * k)
+    assert 1.0 < s <= np.sqrt(3.0 * k)
+    kinetic = 0.5 * mu * v**2
+    work = float(r.crush_work + r.backing_work + r.hinge_work)
+    assert work == pytest.approx(kinetic, rel=1e-8)
+
+
+def test_axial_force_stiffens_the_barrier():
+    """The report's example of figure 3.4.9 (mu 0.5, phi 2, speed 1): the final
+    displacement and the duration fall as eta0 grows, the final hinge distance rises."""
+    eta0 = jnp.asarray([0.0, 2.0, 2.5, 5.0])
+    r = _axial(jnp.full(4, 0.5), jnp.full(4, 2.0), jnp.ones(4), eta0)
+    assert np.all(np.diff(r.w_final) < 0) and np.all(np.diff(r.t_final) < 0)
+    assert np.all(np.diff(r.s_final) > 0)
+    # The hinges stiffen only once the beam has deflected: the crushing phase barely changes.
+    np.testing.assert_allclose(r.damage, r.damage[0], rtol=1e-2)
+
+
+def test_string_stage_is_reported_not_silently_skipped():
+    with pytest.raises(Exception, match="plastic string"):
+        jax.block_until_ready(_axial(0.5, 2.0, 1.0, 20.0).w_final)
+
+
+def test_vmap_equals_loop():
+    mu, phi, v = (jnp.asarray(x) for x in zip(*CASES))
+    eta0 = jnp.asarray([1.0, 0.5, 0.2, 0.005])
+    batched = _axial(mu, phi, v, eta0)
+    for i, case in enumerate(CASES):
+        single = _axial(*case, float(eta0[i]))
+        for field in FIELDS:
+            np.testing.assert_allclose(
+                getattr(batched, field)[i], getattr(single, field), rtol=1e-12, err_msg=field
+            )
+
+
+def test_gradients_match_finite_differences():
+    x0 = np.array([0.5, 2.0, 1.0, 2.5])  # mu, phi, speed, eta0
+
+    def outputs(x):
+        r = _axial(*x)
+        return jnp.stack([r.w_final, r.damage, r.t_final])
+
+    jacobian = np.asarray(jax.jacfwd(outputs)(jnp.asarray(x0)))
+    for j in range(4):
+        step = 1e-5 * x0[j]
+        up, down = x0.copy(), x0.copy()
+        up[j] += step
+        down[j] -= step
+        fd = (np.asarray(outputs(up)) - np.asarray(outputs(down))) / (2 * step)
+        np.testing.assert_allclose(jacobian[:, j], fd, rtol=2e-5, atol=1e-8, err_msg=str(j))
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"axial_ratio": -1.0, "method": "ode"}, "axial_ratio"),
+        ({"axial_ratio": np.nan, "method": "ode"}, "axial_ratio"),
+        ({"axial_ratio": 1.0}, "method"),
+        ({"axial_ratio": 1.0, "method": "ode", "n_history": 10}, "n_history"),
+    ],
+)
+def test_bad_input_names_the_field(kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        normal_impact(0.5, 2.0, 1.0, **kwargs)
