@@ -105,3 +105,17 @@ def test_oblique_impact_benchmark_quick(tmp_path):
         "oblique_impact_stability.png",
     ):
         assert (out / name).stat().st_size > 0
+
+
+def test_axial_force_benchmark_quick(tmp_path):
+    out = tmp_path / "results"
+    data = run_quick("axial_force", out, timeout=300)
+    for section in ("meta", "example", "error_vs_time", "throughput", "gradient"):
+        assert section in data, section
+    ours, *report = data["example"]
+    # The report's scheme converges towards the model as its step falls (a correctness check
+    # of the benchmark's own transcription of the scheme, not a speed check).
+    gaps = [abs(r["reduction_eta0_5"] - ours["reduction_eta0_5"]) for r in report]
+    assert gaps == sorted(gaps, reverse=True)
+    assert data["error_vs_time"]["rows"][-1]["error"] < 1e-6
+    assert (out / "axial_force.png").stat().st_size > 0

@@ -25,8 +25,10 @@ requires.
 Accelerative phase: P = P0 (phi constant), from V0 = 0, W0 = 0, S = S* (3.4.37), until the
 vehicle's velocity 1 - phi T/mu meets V0 (3.4.38). At T = 0, V0 S' = 0 = V0, and S' is
 0/0; its limit is 0 (K/S - S/2 - phi is O(n^2) = O(T^4) there), which is the value used at
-V0 = 0 exactly. S moves by O(T^4) at first and the phase is stiff near T = 0 (the rate
-of S relaxes as 1/V0), so both phases use an L-stable implicit solver.
+V0 = 0 exactly. S moves by O(T^4) at first; near T = 0 the rate of S relaxes as 1/V0,
+which the explicit Tsit5 handles in fewer steps than the L-stable Kvaerno5 (2-30 times
+fewer, measured over light to heavy vehicles at rtol 1e-6 and 1e-9), whose error estimate
+is the more cautious there.
 
 Decelerative phase: phi = -mu V0' (3.4.38), which gives (3.4.39):
 
@@ -141,7 +143,7 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, solver=None) -> dict:
     """The beam stage, speed-free (see the module docstring); `eta` = eta0 V^2. Returns
     the end-of-crushing state, the state at rest (or where the string begins), the works
     and `t_string` (inf where n stays below 1)."""
-    solver = diffrax.Kvaerno5() if solver is None else solver
+    solver = diffrax.Tsit5() if solver is None else solver
     root = jnp.sqrt(phi**2 + 3.0)
     s_star = 3.0 / (root + phi)
     p = _Params(mu, phi, eta, s_star)
@@ -180,7 +182,7 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, solver=None) -> dict:
         (p, v_star),
         switch=lambda sigma, y, args: 1.0 - _axial(y.displacement, args[0])[0],
         switch_required=False,
-        max_steps=4096,
+        max_steps=16384,
         **options,
     )
     d = second.y_end
