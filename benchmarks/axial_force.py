@@ -31,6 +31,7 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
+import functools
 import json
 import os
 import time
@@ -223,9 +224,13 @@ def section_throughput(cfg, seed):
     for batch in cfg["batches"]:
         mu, phi, speed, eta0 = scenarios(batch, seed + batch)
         axial, _ = best_of(
-            lambda: normal_impact(mu, phi, speed, method="ode", rtol=1e-6, axial_ratio=eta0).w_final
+            functools.partial(
+                normal_impact, mu, phi, speed, method="ode", rtol=1e-6, axial_ratio=eta0
+            )
         )
-        plain, _ = best_of(lambda: normal_impact(mu, phi, speed, method="ode", rtol=1e-6).w_final)
+        plain, _ = best_of(
+            functools.partial(normal_impact, mu, phi, speed, method="ode", rtol=1e-6)
+        )
         rows.append(
             {
                 "batch": batch,
