@@ -651,3 +651,57 @@ def _figure_3_4_5() -> Figure:
         "up to $\\delta = \\alpha$, then $\\delta$",
     )
     return fig
+
+
+# --------------------------------------------------------------------------------------
+# Section 3.4, axial force: the dynamic beam stage.
+
+EXAMPLE_3_4_9 = {"mass_ratio": 0.5, "force_ratio": 2.0, "speed": 1.0}
+AXIAL_RATIOS_3_4_9 = (0.0, 2.0, 2.5, 5.0)
+
+
+@figure("3.4.9", "Resulting Curves of the Example in Section 3.4 (ii)")
+def _figure_3_4_9() -> Figure:
+    etas = jnp.asarray(AXIAL_RATIOS_3_4_9)
+    ones = jnp.ones_like(etas)
+    result = normal_impact(
+        EXAMPLE_3_4_9["mass_ratio"] * ones,
+        EXAMPLE_3_4_9["force_ratio"] * ones,
+        EXAMPLE_3_4_9["speed"] * ones,
+        method="ode",
+        rtol=1e-10,
+        axial_ratio=etas,
+        n_history=150,
+    )
+    h = jax.tree.map(np.asarray, result.history)
+    fig = Figure(figsize=(9, 10), layout="constrained")
+    ax_s, ax_v, ax_w, ax_n = fig.subplots(4, 1, sharex=True)
+    w_plain = float(result.w_final[0])
+    for k, eta in enumerate(AXIAL_RATIOS_3_4_9):
+        t = h.time[k]
+        reduction = 100.0 * (1.0 - float(result.w_final[k]) / w_plain)
+        label = rf"$\eta_0$ = {eta:g}" + (f": $W_f$ {-reduction:+.1f} %" if eta else "")
+        ax_s.plot(t, h.hinge[k], color=f"C{k}", label=label)
+        ax_v.plot(t, h.barrier_velocity[k], color=f"C{k}")
+        ax_w.plot(t, h.displacement[k], color=f"C{k}")
+        ax_n.plot(t, h.axial_force[k], color=f"C{k}")
+    ax_s.set_ylabel("hinge distance $S$")
+    ax_s.legend(fontsize=9, title="final displacement against $\\eta_0$ = 0")
+    ax_v.set_ylabel("barrier velocity $V_0$")
+    ax_w.set_ylabel("displacement $W_0$")
+    ax_n.set_ylabel("axial force $N/N_0 = 2\\eta_0 W_0$")
+    ax_n.axhline(1.0, color="0.5", ls=":", lw=0.9)
+    ax_n.annotate(
+        "plastic string", xy=(0.01, 1.0), xytext=(0, -12), textcoords="offset points",
+        fontsize=8, color="0.3", xycoords=("axes fraction", "data"),
+    )
+    ax_n.set_xlabel("time $T$")
+    for ax in (ax_s, ax_v, ax_w, ax_n):
+        ax.grid(True, alpha=0.3)
+    _title(
+        fig, "3.4.9",
+        rf"$\mu$ = {EXAMPLE_3_4_9['mass_ratio']:g}, $\phi$ = {EXAMPLE_3_4_9['force_ratio']:g}, "
+        f"speed {EXAMPLE_3_4_9['speed']:g}\nthe report quotes -2.5 % ($\\eta_0$ = 2) and "
+        "-12.5 % ($\\eta_0$ = 5) from its coarse scheme (benchmarks/axial_force.py)",
+    )
+    return fig

@@ -51,6 +51,7 @@ import math
 
 import diffrax
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from .._custom_types import Scalar
@@ -139,15 +140,17 @@ def _sigma_end(rtol: float) -> float:
     return math.log(1.0 / rtol) + 3.0
 
 
-def axial_beam_stage(mu, phi, eta, *, rtol: float, solver=None) -> dict:
+def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=None) -> dict:
     """The beam stage, speed-free (see the module docstring); `eta` = eta0 V^2. Returns
-    the end-of-crushing state, the state at rest (or where the string begins), the works
-    and `t_string` (inf where n stays below 1)."""
+    the end-of-crushing state, the state at rest (or where the string begins), the works,
+    `t_string` (inf where n stays below 1) and, with `n_history`, `history`: that many
+    samples per phase and the state at rest, in the fields of `normal.py`'s histories
+    plus `axial_force`."""
     solver = diffrax.Tsit5() if solver is None else solver
     root = jnp.sqrt(phi**2 + 3.0)
     s_star = 3.0 / (root + phi)
     p = _Params(mu, phi, eta, s_star)
-    options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol}
+    options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol, "dense": bool(n_history)}
     zero = jnp.zeros_like(mu)
     # Without axial force the phase lasts 1/((phi - S*)/S* + phi/mu); it can only be
     # shorter with it (the mechanism stiffens, and the velocities meet sooner).
@@ -201,7 +204,9 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, solver=None) -> dict:
         "stretching_work": d.stretching_work + dw * n_end**2 / d.hinge,
     }
     t_string = jnp.where(string_in_first, first.t_end, jnp.where(second.switched, d.time, jnp.inf))
+    history = _history(first, second, p, v_star, rest, n_history) if n_history else None
     return dict(
+        history=history,
         s_star=s_star,
         t_star=first.t_end,
         v_star=v_star,
@@ -211,3 +216,36 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, solver=None) -> dict:
         t_string=t_string,
         **rest,
     )
+
+
+def _history(first, second, p: _Params, v_star, rest, n_history):
+    """Phase 1 uniform in time (n_history samples), phase 2 uniform in sigma after its
+    start up to where the solve stopped (n_history - 1), then the state at rest."""
+    k = jnp.linspace(0.0, 1.0, n_history)
+    a = jax.vmap(first.dense.evaluate)(first.t_end * k)
+    sigma = second.t_end * k[1:]
+    d = jax.vmap(second.dense.evaluate)(sigma)
+    v = v_star * jnp.exp(-sigma)
+    n1, _ = _axial(a.displacement, p)
+    n2, acceleration, _ = _decelerating_rates(d.hinge, d.displacement, p)
+    n_rest, _ = _axial(rest["w_final"], p)
+
+    def joined(first_phase, second_phase, at_rest):
+        return jnp.concatenate([first_phase, second_phase, jnp.atleast_1d(at_rest)])
+
+    return {
+        "time": joined(first.t_end * k, d.time, rest["t_final"]),
+        "vehicle_velocity": joined(a.vehicle_velocity, v, 0.0),
+        "barrier_velocity": joined(a.beam_velocity, v, 0.0),
+        "hinge": joined(p.s_star + a.hinge_offset, d.hinge, rest["s_final"]),
+        "displacement": joined(a.displacement, d.displacement, rest["w_final"]),
+        "contact_force": joined(jnp.full_like(k, p.phi), -p.mu * acceleration, 0.0),
+        "crush": joined(a.crush, jnp.full_like(sigma, a.crush[-1]), a.crush[-1]),
+        "backing_work": joined(a.backing_work, d.backing_work, rest["backing_work"]),
+        "hinge_work": joined(
+            a.bending_work + a.stretching_work,
+            d.bending_work + d.stretching_work,
+            rest["bending_work"] + rest["stretching_work"],
+        ),
+        "axial_force": joined(n1, n2, n_rest),
+    }

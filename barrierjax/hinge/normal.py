@@ -92,6 +92,7 @@ class NormalImpactHistory(eqx.Module):
     hinge_work: Vector
     beam_kinetic_energy: Vector
     vehicle_kinetic_energy: Vector
+    axial_force: Vector | None = None  # N/N0, with axial force (report 3.4) only
 
 
 class NormalImpact(eqx.Module):
@@ -660,14 +661,34 @@ def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
 
 
-@functools.partial(jax.jit, static_argnames=("rtol",))
-def _normal_impact_axial(mu, phi, speed, eta0, *, rtol):
+@functools.partial(jax.jit, static_argnames=("rtol", "n_history"))
+def _normal_impact_axial(mu, phi, speed, eta0, *, rtol, n_history):
     """With axial force (report 3.4, `axial.py`): the beam stage by time integration; in
     the speed-free variables the speed enters through eta0 V^2."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)
-    stage = forward_jacobian_jvp(functools.partial(axial_beam_stage, rtol=rtol))
+    stage = forward_jacobian_jvp(
+        functools.partial(axial_beam_stage, rtol=rtol, n_history=n_history)
+    )
     r = stage(mu, safe_phi, eta0 * speed**2)
+    history = None
+    if n_history:
+        h = r["history"]
+        vehicle, beam = h["vehicle_velocity"] * speed, h["barrier_velocity"] * speed
+        history = NormalImpactHistory(
+            time=h["time"] * speed,
+            vehicle_velocity=vehicle,
+            barrier_velocity=beam,
+            hinge=h["hinge"],
+            displacement=h["displacement"] * speed**2,
+            contact_force=h["contact_force"],
+            crush=h["crush"] * speed**2,
+            backing_work=h["backing_work"] * speed**2,
+            hinge_work=h["hinge_work"] * speed**2,
+            beam_kinetic_energy=beam**2 * h["hinge"] / 3.0,
+            vehicle_kinetic_energy=0.5 * mu * vehicle**2,
+            axial_force=h["axial_force"],
+        )
     t_string = eqx.error_if(
         r["t_string"] * speed,
         jnp.isfinite(r["t_string"]) & yields,
@@ -687,9 +708,14 @@ def _normal_impact_axial(mu, phi, speed, eta0, *, rtol):
         backing_work=r["backing_work"] * speed**2,
         hinge_work=(r["bending_work"] + r["stretching_work"]) * speed**2,
         t_string=t_string,
-        history=None,
+        history=history,
     )
-    rigid = _rigid_barrier(mu, phi, speed, 0)
+    rigid = _rigid_barrier(mu, phi, speed, n_history)
+    if n_history:
+        rigid = eqx.tree_at(
+            lambda r: r.history.axial_force, rigid, jnp.zeros_like(rigid.history.time),
+            is_leaf=lambda x: x is None,
+        )
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
 
 
@@ -723,7 +749,7 @@ def normal_impact(
       the report's units (3.4), for a beam held against axial motion; non-negative.
       `None` or `0` is the model of 3.2, compiled without any axial term. Otherwise the
       beam stage of 3.4 is integrated in time (it has no closed form; `method` must be
-      `"ode"`, and `n_history` 0 for now), and `t_string` reports where N reaches N0.
+      `"ode"`), `t_string` reports where N reaches N0, and the history has `axial_force`.
 
     Scalars, or arrays of one shape (solved in cache-sized vmapped chunks: the fastest
     way to run a large sweep); `jax.vmap` and `jax.grad` work with respect to any
@@ -744,11 +770,11 @@ def normal_impact(
                 "method must be 'ode' with axial_ratio: the beam stage of report 3.4 has "
                 f"no closed form; got {method!r}"
             )
-        if n_history:
-            raise ValueError(f"n_history must be 0 with axial_ratio (for now); got {n_history!r}")
         eta0 = _checks.non_negative("axial_ratio", axial_ratio)
         args = jnp.broadcast_arrays(mu, phi, speed, eta0)
-        solve = functools.partial(_normal_impact_axial, rtol=float(rtol))
+        solve = functools.partial(
+            _normal_impact_axial, rtol=float(rtol), n_history=int(n_history)
+        )
         for _ in range(args[0].ndim):
             solve = jax.vmap(solve)
         return solve(*args)
