@@ -82,9 +82,11 @@ def result_dict(scene, result, name: str = "") -> dict:
     return {
         "scene": name,
         "model": (
-            "normal impact, rigid-plastic vehicle, beam and backing (report 3.2)"
-            if result.model.__class__.__name__ == "NormalImpact"
-            else "oblique impact with convective terms (report 3.3)"
+            "oblique impact with convective terms (report 3.3)"
+            if result.model.__class__.__name__ != "NormalImpact"
+            else "normal impact, rigid-plastic vehicle, beam and backing (report 3.2)"
+            if groups.axial_ratio is None
+            else "normal impact on a beam held against axial motion (report 3.4)"
         ),
         "inputs": {
             "plastic_moment_N_m": _f(barrier.plastic_moment),
@@ -102,6 +104,7 @@ def result_dict(scene, result, name: str = "") -> dict:
         "mass_ratio": _f(groups.mass_ratio),
         "force_ratio": _f(groups.force_ratio),
         "speed_dimensionless": _f(groups.normal_speed),
+        "axial_ratio": None if groups.axial_ratio is None else _f(groups.axial_ratio),
         "length_scale_m": _f(scales.length),
         "force_scale_N": _f(scales.force),
         "time_scale_s": _f(scales.time),
@@ -162,6 +165,11 @@ def format_summary(data: dict) -> str:
         f"  mass ratio   mu  = M / (m L)   = {data['mass_ratio']:.4g}",
         f"  force ratio  phi = P0 / P_b    = {data['force_ratio']:.4g}",
         f"  speed        V0  = v t0 / L    = {data['speed_dimensionless']:.4g}",
+        *(
+            []
+            if data["axial_ratio"] is None
+            else [f"  axial ratio  eta0 = N0 / P_b   = {data['axial_ratio']:.4g}"]
+        ),
         f"  scales       L = {data['length_scale_m']:.4g} m, "
         f"P_b = {data['force_scale_N'] / 1e3:.4g} kN, t0 = {data['time_scale_s'] * 1e3:.4g} ms",
         "",
@@ -193,6 +201,13 @@ def format_summary(data: dict) -> str:
 # Commands.
 
 
+def _model_error(error: Exception) -> str:
+    """The message a model raised at run time, without the traceback XLA wraps it in."""
+    marker = "_EquinoxRuntimeError: "
+    lines = [line for line in str(error).splitlines() if marker in line]
+    return lines[-1].split(marker, 1)[1].strip() if lines else " ".join(str(error).split())
+
+
 def _scene_error(error: Exception) -> CommandError:
     """A library error about a scene (ValueError, NotImplementedError), worded by the
     scene-file key it concerns."""
@@ -221,6 +236,8 @@ def _run(args) -> int:
         with _progress_after("compiling and solving the impact model (report 3.2/3.3)..."):
             result = simulate(scene)
             jax.block_until_ready(result)
+    except jax.errors.JaxRuntimeError as error:  # a model's run-time check (equinox.error_if)
+        raise CommandError(_model_error(error), EXIT_FAILED) from None
     except (NotImplementedError, ValueError) as error:
         raise _scene_error(error) from None
     data = result_dict(scene, result, name)

@@ -101,15 +101,17 @@ def _is_normal(scene: Scene, oblique: bool | None) -> bool:
     oblique model; a traced angle (under `jit` or `vmap`) takes the normal one and must
     be 90 degrees at run time, so that a normal sweep never pays for the oblique model.
     `oblique=True` forces the oblique model (which also covers 90 degrees)."""
-    if scene.barrier.axial_capacity is not None:
-        raise NotImplementedError(
-            "Barrier.axial_capacity is set, but the axial-force model (report 3.4) is not "
-            "implemented yet; leave axial_capacity=None"
-        )
     if oblique is not None:
-        return not oblique
-    angle = scene.impact.angle_deg
-    return isinstance(angle, Tracer) or bool(np.all(np.asarray(angle) == 90.0))
+        normal = not oblique
+    else:
+        angle = scene.impact.angle_deg
+        normal = isinstance(angle, Tracer) or bool(np.all(np.asarray(angle) == 90.0))
+    if scene.barrier.axial_capacity is not None and not normal:
+        raise NotImplementedError(
+            "Barrier.axial_capacity is set for an oblique impact: the axial-force model of "
+            "report 3.4 is a normal impact's; leave axial_capacity=None or strike at 90 degrees"
+        )
+    return normal
 
 
 def _require_normal_angle(scene: Scene) -> Scene:
@@ -186,7 +188,9 @@ def simulate(
     - Oblique impact (a concrete angle below 90 degrees, or `oblique=True`, which a
       `vmap` over angles needs): report 3.3 by `barrierjax.hinge.oblique_impact` with
       `rtol` (`method` does not apply; see that module for its current limits).
-    - An axial capacity raises `NotImplementedError` until report 3.4 lands.
+    - With `Barrier.axial_capacity` (a normal impact only): the beam stage of report 3.4,
+      integrated in time whatever `method` (it has no closed form); a run that reaches the
+      plastic string stops with an error that says so (that stage is not solved yet).
     """
     if _is_normal(scene, oblique):
         scene = _require_normal_angle(scene)
@@ -196,13 +200,15 @@ def simulate(
 
 def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
     s = groups.scales
+    axial = groups.axial_ratio is not None
     model = normal_impact(
         groups.mass_ratio,
         groups.force_ratio,
         groups.normal_speed,
-        method=method,
+        method="ode" if axial else method,
         rtol=rtol,
         n_history=n_history,
+        axial_ratio=groups.axial_ratio,
     )
     vehicle = scene.vehicle
     history = None

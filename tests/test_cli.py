@@ -148,9 +148,15 @@ BAD = [
     ('speed = "35 mph"', 'speed = "35 mph"\nfriction = -1', "[impact] friction"),
     ("[vehicle]", "[lorry]", "[lorry]"),
     ('speed = "35 mph"', 'speed = "35 mph"\n[extra]\nx = 1', "[extra]"),
-    # Valid files for models not implemented yet: one line naming the key, status 2.
-    ('plastic_moment = "1e6 lbf*in"', 'plastic_moment = "1e6 lbf*in"\naxial_capacity = "1 MN"',
-     "[barrier] axial_capacity"),
+    # Valid files for models not implemented yet (axial force in an oblique impact): one
+    # line naming the key, status 2.
+    (
+        'backing_strength = "50 kN/m"\n[vehicle]\nmass = "1100 kg"\ncrush_force = "400 kN"\n'
+        '[impact]\nspeed = "35 mph"',
+        'backing_strength = "50 kN/m"\naxial_capacity = "1 MN"\n[vehicle]\nmass = "1100 kg"\n'
+        'crush_force = "400 kN"\n[impact]\nspeed = "35 mph"\nangle = "60 deg"',
+        "[barrier] axial_capacity",
+    ),
 ]
 
 

@@ -98,8 +98,25 @@ def test_gradient_with_respect_to_every_scene_leaf(method):
         assert float(jnp.max(jnp.abs(jacobian[:, i] - fd) / scale)) < 1e-5, i
 
 
+def test_axial_capacity_runs_the_axial_model():
+    barrier = bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6)
+    scene = eqx.tree_at(lambda s: s.barrier, si_scene(), barrier)
+    result = bj.simulate(scene, n_history=20)
+    g = bj.dimensionless(scene)
+    model = bj.hinge.normal_impact(
+        g.mass_ratio, g.force_ratio, g.normal_speed, method="ode", axial_ratio=g.axial_ratio
+    )
+    assert float(result.max_deflection) == pytest.approx(float(model.w_final * g.scales.length))
+    plain = bj.simulate(si_scene(), n_history=0)
+    assert float(result.max_deflection) < float(plain.max_deflection)
+    assert np.isinf(float(result.model.t_string))
+    total = result.crush_work + result.backing_work + result.hinge_work
+    assert float(total) == pytest.approx(float(result.kinetic_energy), rel=1e-7)
+
+
 def test_unimplemented_physics_is_refused_not_ignored():
-    axial = eqx.tree_at(lambda s: s.barrier, si_scene(), bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6))
+    barrier = bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6)
+    axial = bj.Scene(barrier, si_scene().vehicle, bj.Impact(10.0, angle_deg=30.0))
     with pytest.raises(NotImplementedError, match="axial_capacity"):
         bj.simulate(axial)
 
