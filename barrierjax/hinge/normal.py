@@ -602,29 +602,35 @@ def _rigid_barrier(mu, phi, speed, n_history) -> NormalImpact:
 
 
 def _finish_history(raw, mu, phi, speed, acc, damage_per_speed2) -> NormalImpactHistory:
-    """Scale speed-free histories by the impact speed and add the derived quantities."""
-    time = raw["time"] * speed
-    vehicle = raw["vehicle_velocity"] * speed
-    beam = raw["barrier_velocity"] * speed
+    """Add the contact force and the crush of 3.2 to speed-free histories, and scale."""
     s = raw["hinge"]
     n = s.shape[0] // 2
     in_first = jnp.arange(2 * n) < n
     force = jnp.where(in_first, phi, mu * (s**2 + 3.0) / (2.0 * s * (s + 2.0 * mu)))
     t1 = jnp.minimum(raw["time"], acc.t_star)
-    crush = (t1 - 0.5 * (acc.deceleration + acc.acceleration) * t1**2) * speed**2
-    crush = jnp.where(in_first, crush, damage_per_speed2 * speed**2)
+    crush = t1 - 0.5 * (acc.deceleration + acc.acceleration) * t1**2
+    crush = jnp.where(in_first, crush, damage_per_speed2)
+    return _scaled_history(dict(raw, contact_force=force, crush=crush), mu, speed)
+
+
+def _scaled_history(raw, mu, speed) -> NormalImpactHistory:
+    """Speed-free histories (tau, v, w and works per unit speed) scaled by the impact
+    speed, with the kinetic energies."""
+    vehicle = raw["vehicle_velocity"] * speed
+    beam = raw["barrier_velocity"] * speed
     return NormalImpactHistory(
-        time=time,
+        time=raw["time"] * speed,
         vehicle_velocity=vehicle,
         barrier_velocity=beam,
-        hinge=s,
+        hinge=raw["hinge"],
         displacement=raw["displacement"] * speed**2,
-        contact_force=force,
-        crush=crush,
+        contact_force=raw["contact_force"],
+        crush=raw["crush"] * speed**2,
         backing_work=raw["backing_work"] * speed**2,
         hinge_work=raw["hinge_work"] * speed**2,
-        beam_kinetic_energy=beam**2 * s / 3.0,
+        beam_kinetic_energy=beam**2 * raw["hinge"] / 3.0,
         vehicle_kinetic_energy=0.5 * mu * vehicle**2,
+        axial_force=raw.get("axial_force"),
     )
 
 
@@ -671,24 +677,7 @@ def _normal_impact_axial(mu, phi, speed, eta0, *, rtol, n_history):
         functools.partial(axial_beam_stage, rtol=rtol, n_history=n_history)
     )
     r = stage(mu, safe_phi, eta0 * speed**2)
-    history = None
-    if n_history:
-        h = r["history"]
-        vehicle, beam = h["vehicle_velocity"] * speed, h["barrier_velocity"] * speed
-        history = NormalImpactHistory(
-            time=h["time"] * speed,
-            vehicle_velocity=vehicle,
-            barrier_velocity=beam,
-            hinge=h["hinge"],
-            displacement=h["displacement"] * speed**2,
-            contact_force=h["contact_force"],
-            crush=h["crush"] * speed**2,
-            backing_work=h["backing_work"] * speed**2,
-            hinge_work=h["hinge_work"] * speed**2,
-            beam_kinetic_energy=beam**2 * h["hinge"] / 3.0,
-            vehicle_kinetic_energy=0.5 * mu * vehicle**2,
-            axial_force=h["axial_force"],
-        )
+    history = _scaled_history(r["history"], mu, speed) if n_history else None
     t_string = eqx.error_if(
         r["t_string"] * speed,
         jnp.isfinite(r["t_string"]) & yields,
