@@ -6,6 +6,8 @@ interpolant so that the switching time carries an exact gradient (a boolean even
 give a zero one).
 """
 
+import math
+
 import diffrax
 import equinox as eqx
 import jax
@@ -89,3 +91,9 @@ def solve_phase(
         switched=switched,
         dense=solution if dense else None,
     )
+
+
+def sigma_end(rtol: float) -> float:
+    """Where a decelerative phase integrated in sigma = ln(V*/V) hands over to the
+    analytic run-out to rest: e^-sigma_end is below rtol by e^-3."""
+    return math.log(1.0 / rtol) + 3.0

@@ -47,14 +47,13 @@ plastic string (3.4.45), whose motion this module does not solve; `t_string` rep
 where it begins.
 """
 
-import math
-
 import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 
 from .._custom_types import Scalar
+from .._solve.phases import sigma_end as _sigma_end
 from .._solve.phases import solve_phase
 
 
@@ -136,10 +135,6 @@ def _decelerating_field(sigma, y: _Decelerating, args) -> _Decelerating:
     )
 
 
-def _sigma_end(rtol: float) -> float:
-    return math.log(1.0 / rtol) + 3.0
-
-
 def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=None) -> dict:
     """The beam stage, speed-free (see the module docstring); `eta` = eta0 V^2. Returns
     the end-of-crushing state, the state at rest (or where the string begins), the works,
@@ -152,14 +147,14 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=No
     p = _Params(mu, phi, eta, s_star)
     options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol, "dense": bool(n_history)}
     zero = jnp.zeros_like(mu)
-    # Without axial force the phase lasts 1/((phi - S*)/S* + phi/mu); it can only be
-    # shorter with it (the mechanism stiffens, and the velocities meet sooner).
-    duration = 1.0 / ((phi - s_star) / s_star + phi / mu)
+    # The velocities meet by T = mu/phi at the latest, where the vehicle's has fallen to
+    # zero and the beam's is not negative (the axial force slows the beam, so the phase
+    # outlasts its 3.2 length 1/((phi - S*)/S* + phi/mu)).
     first = solve_phase(
         _accelerating_field,
         _Accelerating(zero + 1.0, zero, zero, zero, zero, zero, zero, zero),
         zero,
-        2.0 * duration,
+        mu / phi,
         p,
         switch=lambda t, y, p: jnp.minimum(
             y.vehicle_velocity - y.beam_velocity, 1.0 - _axial(y.displacement, p)[0]
@@ -211,7 +206,6 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=No
         t_star=first.t_end,
         v_star=v_star,
         w_star=a.displacement,
-        s_at_star=s_star + a.hinge_offset,
         damage=a.crush,
         t_string=t_string,
         **rest,

@@ -68,6 +68,7 @@ import jax.numpy as jnp
 
 from .. import _checks
 from .._custom_types import Scalar, Vector
+from .._solve.phases import sigma_end as _sigma_end
 from .._solve.phases import solve_phase
 from .._solve.quadrature import gauss_legendre, jacobi_product_nodes, jacobi_product_weights
 from .._solve.sensitivity import forward_jacobian_jvp
@@ -470,12 +471,6 @@ def _complete_at_rest(dec, sigma_end, y: _RunOutState):
     )
 
 
-def _sigma_end(rtol: float) -> float:
-    """Where the decelerative solve hands over to `_complete_at_rest`: e^-sigma_end is
-    below rtol by e^-3."""
-    return math.log(1.0 / rtol) + 3.0
-
-
 def _ode_phases(mu, phi, *, rtol, solver, dense=False):
     """The two diffrax solves, in the speed-free variables; also used by the benchmark for
     step counts."""
@@ -561,8 +556,9 @@ def _ode_history(first, second, dec, final, n_history, sigma_end, time_unit):
 # Public function.
 
 
-def _rigid_barrier(mu, phi, speed, n_history) -> NormalImpact:
-    """phi <= 1: the barrier never yields and the vehicle crushes to rest at P0."""
+def _rigid_barrier(mu, phi, speed, n_history, axial=False) -> NormalImpact:
+    """phi <= 1: the barrier never yields and the vehicle crushes to rest at P0 (with
+    `axial`, its history has N/N0 = 0)."""
     zero = jnp.zeros_like(mu)
     t_stop = mu * speed / phi
     damage = 0.5 * mu * speed**2 / phi
@@ -583,6 +579,7 @@ def _rigid_barrier(mu, phi, speed, n_history) -> NormalImpact:
             hinge_work=zeros,
             beam_kinetic_energy=zeros,
             vehicle_kinetic_energy=0.5 * mu * vehicle**2,
+            axial_force=zeros if axial else None,
         )
     return NormalImpact(
         s_star=zero,
@@ -699,12 +696,7 @@ def _normal_impact_axial(mu, phi, speed, eta0, *, rtol, n_history):
         t_string=t_string,
         history=history,
     )
-    rigid = _rigid_barrier(mu, phi, speed, n_history)
-    if n_history:
-        rigid = eqx.tree_at(
-            lambda r: r.history.axial_force, rigid, jnp.zeros_like(rigid.history.time),
-            is_leaf=lambda x: x is None,
-        )
+    rigid = _rigid_barrier(mu, phi, speed, n_history, axial=True)
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
 
 

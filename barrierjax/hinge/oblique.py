@@ -233,7 +233,7 @@ def _slope_memory(past: _Past, x):
     Only the segment's samples are read, so that a lookup at a jump of Psi' (recorded
     twice, left and right limits) takes the side the load is on whatever the rounding of
     x. The interval is picked from the window by comparison, not indexing: under `vmap` an
-    index is a gather, and gathers were most of a step's cost."""
+    index is a gather, which XLA runs as a kernel of its own."""
     offsets = jnp.arange(_WINDOW, dtype=past.start.dtype)
     below = jnp.sum(past.hinge <= x).astype(past.start.dtype)
     i = jnp.clip(past.start + below - 1, past.first, jnp.maximum(past.last - 1, past.first))
