@@ -51,10 +51,12 @@ import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from jaxtyping import Array, Float
 
 from .._custom_types import Scalar
 from .._solve.phases import sigma_end as _sigma_end
 from .._solve.phases import solve_phase
+from .string import StringStage, StringStart, plastic_string_stage
 
 
 class _Params(eqx.Module):
@@ -135,18 +137,10 @@ def _decelerating_field(sigma, y: _Decelerating, args) -> _Decelerating:
     )
 
 
-def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=None) -> dict:
-    """The beam stage, speed-free (see the module docstring); `eta` = eta0 V^2. Returns
-    the end-of-crushing state, the state at rest (or where the string begins), the works,
-    `t_string` (inf where n stays below 1) and, with `n_history`, `history`: that many
-    samples per phase and the state at rest, in the fields of `normal.py`'s histories
-    plus `axial_force`."""
-    solver = diffrax.Tsit5() if solver is None else solver
-    root = jnp.sqrt(phi**2 + 3.0)
-    s_star = 3.0 / (root + phi)
-    p = _Params(mu, phi, eta, s_star)
-    options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol, "dense": bool(n_history)}
-    zero = jnp.zeros_like(mu)
+def _beam_phases(p: _Params, *, rtol, solver, dense):
+    """The two phases of the beam stage, each ending where N reaches N0 if it does."""
+    options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol, "dense": dense}
+    zero = jnp.zeros_like(p.mu)
     # The velocities meet by T = mu/phi at the latest, where the vehicle's has fallen to
     # zero and the beam's is not negative (the axial force slows the beam, so the phase
     # outlasts its 3.2 length 1/((phi - S*)/S* + phi/mu)).
@@ -154,7 +148,7 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=No
         _accelerating_field,
         _Accelerating(zero + 1.0, zero, zero, zero, zero, zero, zero, zero),
         zero,
-        mu / phi,
+        p.mu / p.phi,
         p,
         switch=lambda t, y, p: jnp.minimum(
             y.vehicle_velocity - y.beam_velocity, 1.0 - _axial(y.displacement, p)[0]
@@ -164,33 +158,163 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=No
     )
     a = first.y_end
     string_in_first = _axial(a.displacement, p)[0] >= 1.0 - 1e-9
-    v_star = a.beam_velocity
     second = solve_phase(
         _decelerating_field,
-        _Decelerating(
-            s_star + a.hinge_offset,
-            first.t_end,
-            a.displacement,
-            a.backing_work,
-            a.bending_work,
-            a.stretching_work,
-        ),
+        _decelerating_start(first, p),
         zero,
-        zero + _sigma_end(rtol),
-        (p, v_star),
+        jnp.where(string_in_first, zero, _sigma_end(rtol)),
+        (p, a.beam_velocity),
         switch=lambda sigma, y, args: 1.0 - _axial(y.displacement, args[0])[0],
         switch_required=False,
         max_steps=16384,
         **options,
     )
+    return first, second, string_in_first
+
+
+def _decelerating_start(first, p: _Params) -> _Decelerating:
+    a = first.y_end
+    return _Decelerating(
+        p.s_star + a.hinge_offset,
+        first.t_end,
+        a.displacement,
+        a.backing_work,
+        a.bending_work,
+        a.stretching_work,
+    )
+
+
+class _Trace(eqx.Module):
+    """Samples of the beam stage at uniform steps h of its independent variable: the
+    hinge distance S, the centre's displacement W0 and the centre's slope q = int v0/xi
+    dt (the half-rotation of the centre hinge), with their rates."""
+
+    h: Scalar
+    values: Float[Array, "3 samples"]
+    rates: Float[Array, "3 samples"]
+
+
+def _trace(field, hinge, y0, q0, t_end, args, *, samples, options) -> _Trace:
+    """Solve a beam phase again over [0, t_end], with q alongside, sampled at `samples`
+    uniform points. `hinge = (name, offset)`: S is offset + the state's field `name`."""
+    name, offset = hinge
+
+    def traced(t, state, args):
+        y, _ = state
+        rates = field(t, y, args)
+        return rates, rates.displacement / (offset + getattr(y, name))
+
+    zero = jnp.zeros_like(t_end)
+    ts = t_end * jnp.linspace(0.0, 1.0, samples)
+    solution = solve_phase(traced, (y0, q0), zero, t_end, args, ts=ts, max_steps=16384, **options)
+    y, q = solution.samples
+    rates, q_rate = jax.vmap(traced, in_axes=(0, 0, None))(ts, (y, q), args)
+    return _Trace(
+        h=t_end / (samples - 1),
+        values=jnp.stack([offset + getattr(y, name), y.displacement, q]),
+        rates=jnp.stack([getattr(rates, name), rates.displacement, q_rate]),
+    )
+
+
+def _hermite(trace: _Trace, k, theta):
+    """The cubic Hermite interpolant of all three traced quantities on interval k."""
+    t2, t3 = theta * theta, theta**3
+    h00, h10, h01, h11 = 2 * t3 - 3 * t2 + 1, t3 - 2 * t2 + theta, 3 * t2 - 2 * t3, t3 - t2
+    y, m = trace.values, trace.rates * trace.h
+    return h00 * y[:, k] + h10 * m[:, k] + h01 * y[:, k + 1] + h11 * m[:, k + 1]
+
+
+def _when_hinge_passed(trace: _Trace, x):
+    """W0 and q when the hinge passed x (W0 = q = ... at the start if it started beyond
+    x): the interval by search, the point in it by bisection on the interpolant of S.
+    Not differentiated: w(x) below is stationary in this point (its rate there is
+    v0 (1 - x/S) = 0)."""
+    trace = jax.lax.stop_gradient(trace)
+    s = trace.values[0]
+    k = jnp.clip(jnp.searchsorted(s, x) - 1, 0, s.shape[0] - 2)
+
+    def halve(bounds, _):
+        lower, upper = bounds
+        middle = 0.5 * (lower + upper)
+        below = _hermite(trace, k, middle)[0] < x
+        return (jnp.where(below, middle, lower), jnp.where(below, upper, middle)), None
+
+    start = (jnp.zeros_like(x), jnp.ones_like(x))
+    (lower, upper), _ = jax.lax.scan(halve, start, None, length=48)
+    return k, 0.5 * (lower + upper)
+
+
+def _profile(trace: _Trace, x):
+    """w(x) = int v0 (1 - x/xi)_+ dt (3.4.46) = [W0 - x q] from when the hinge passed x
+    to the end of the trace."""
+    k, theta = _when_hinge_passed(trace, x)
+    _, w_passed, q_passed = _hermite(trace, k, theta)
+    w_end, q_end = trace.values[1, -1], trace.values[2, -1]
+    return (w_end - w_passed) - x * (q_end - q_passed)
+
+
+def _string_start(first, second, string_in_first, p: _Params, *, cells, rtol, solver):
+    """The string's initial conditions (3.4.46): the span and the velocities where N
+    reaches N0, and the displacement at the string's nodes, from a second pass over the
+    beam stage (to the same ends, known only after the first) that samples S, W0 and q
+    finely enough for cubic interpolation. Where the string is never reached the passes
+    are empty and the start is a string at rest."""
+    a, d = first.y_end, second.y_end
+    reached = string_in_first | second.switched
+    span = jnp.where(reached, jnp.where(string_in_first, p.s_star + a.hinge_offset, d.hinge), 1.0)
+    nodes = span * jnp.arange(cells + 1, dtype=span.dtype) / cells
+    options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol}
+    samples = 4 * cells + 1
+    zero = jnp.zeros_like(p.mu)
+    accelerating = _trace(
+        _accelerating_field,
+        ("hinge_offset", p.s_star),
+        _Accelerating(zero + 1.0, zero, zero, zero, zero, zero, zero, zero),
+        zero,
+        jnp.where(reached, first.t_end, zero),
+        p,
+        samples=samples,
+        options=options,
+    )
+    decelerating = _trace(
+        _decelerating_field,
+        ("hinge", 0.0),
+        _decelerating_start(first, p),
+        accelerating.values[2, -1],
+        jnp.where(reached & ~string_in_first, second.t_end, zero),
+        (p, a.beam_velocity),
+        samples=samples,
+        options=options,
+    )
+    in_first = jnp.where(string_in_first, True, nodes <= accelerating.values[0, -1])
+    w_first = jax.vmap(_profile, in_axes=(None, 0))(accelerating, nodes)
+    # A node passed in the first phase lies at w(x) from the first phase's trace plus the
+    # uniform growth W0 - x q of the second.
+    growth = (decelerating.values[1, -1] - decelerating.values[1, 0]) - nodes * (
+        decelerating.values[2, -1] - decelerating.values[2, 0]
+    )
+    w_second = jax.vmap(_profile, in_axes=(None, 0))(decelerating, nodes)
+    displacement = jnp.where(in_first, w_first + jnp.where(string_in_first, 0.0, growth), w_second)
+    v_string = a.beam_velocity * jnp.exp(-second.t_end)
+    centre = jnp.where(string_in_first, a.beam_velocity, v_string)
+    vehicle = jnp.where(string_in_first, a.vehicle_velocity, v_string)
+    return reached, StringStart(
+        span=span,
+        displacement=displacement.at[-1].set(0.0),
+        centre_velocity=jnp.where(reached, centre, 0.0),
+        vehicle_velocity=jnp.where(reached, vehicle, 0.0),
+    )
+
+
+def _at_rest(second, p: _Params, v_star, rtol):
+    """The end of a decelerative phase that ran to V0 = V* e^-sigma_end, completed to rest
+    with S frozen and V0' constant."""
     d = second.y_end
-    # The rest from V0 = V* e^-sigma_end, with S frozen and V0' constant.
     v_end = v_star * jnp.exp(-_sigma_end(rtol))
-    _, acceleration, _ = _decelerating_rates(d.hinge, d.displacement, p)
-    n_end, _ = _axial(d.displacement, p)
+    n_end, acceleration, _ = _decelerating_rates(d.hinge, d.displacement, p)
     remaining = v_end / -acceleration
     dw = 0.5 * v_end * remaining
-    rest = {
+    return {
         "s_final": d.hinge,
         "t_final": d.time + remaining,
         "w_final": d.displacement + dw,
@@ -198,48 +322,155 @@ def axial_beam_stage(mu, phi, eta, *, rtol: float, n_history: int = 0, solver=No
         "bending_work": d.bending_work + 0.5 * dw / d.hinge * (1.0 - n_end**2),
         "stretching_work": d.stretching_work + dw * n_end**2 / d.hinge,
     }
-    t_string = jnp.where(string_in_first, first.t_end, jnp.where(second.switched, d.time, jnp.inf))
-    history = _history(first, second, p, v_star, rest, n_history) if n_history else None
+
+
+def _after_string(first, second, string_in_first, string: StringStage, start: StringStart):
+    """The final state when the string stage carried the motion to rest: the works of
+    the beam stage up to t_string plus the string's backing work (its stretching work is
+    reported on its own)."""
+    a, d = first.y_end, second.y_end
+
+    def at_string(field):
+        return jnp.where(string_in_first, getattr(a, field), getattr(d, field))
+
+    return {
+        "s_final": start.span,
+        "t_final": jnp.where(string_in_first, first.t_end, d.time) + string.duration,
+        "w_final": string.displacement[0],
+        "backing_work": at_string("backing_work") + string.backing_work,
+        "bending_work": at_string("bending_work"),
+        "stretching_work": at_string("stretching_work"),
+    }
+
+
+def axial_impact(
+    mu,
+    phi,
+    eta,
+    *,
+    rtol: float,
+    n_history: int = 0,
+    solver=None,
+    string_cells: int = 128,
+    string_courant: float = 1.0,
+    string_max_steps: int = 1_000_000,
+) -> dict:
+    """Both stages, speed-free (see the module docstring); `eta` = eta0 V^2. Returns the
+    end-of-crushing state, the state at rest, the works, `t_string` (inf where n stays
+    below 1), `string_work` and the string's flow-rule check and, with `n_history`,
+    `history`: samples per phase and the state at rest, in the fields of `normal.py`'s
+    histories plus `axial_force`."""
+    solver = diffrax.Tsit5() if solver is None else solver
+    root = jnp.sqrt(phi**2 + 3.0)
+    p = _Params(mu, phi, eta, 3.0 / (root + phi))
+    first, second, string_in_first = _beam_phases(p, rtol=rtol, solver=solver, dense=bool(n_history))
+    reached, start = _string_start(
+        first, second, string_in_first, p, cells=string_cells, rtol=rtol, solver=solver
+    )
+    string = plastic_string_stage(
+        start,
+        mu,
+        phi,
+        jnp.where(reached, eta, 1.0),
+        courant=string_courant,
+        max_steps=string_max_steps,
+        n_history=n_history,
+    )
+    v_star = first.y_end.beam_velocity
+    beam_only = _at_rest(second, p, v_star, rtol)
+    with_string = _after_string(first, second, string_in_first, string, start)
+    final = {key: jnp.where(reached, with_string[key], beam_only[key]) for key in beam_only}
+    t_string = jnp.where(string_in_first, first.t_end, second.y_end.time)
+    crush = first.y_end.crush
     return dict(
-        history=history,
-        s_star=s_star,
+        history=_history(first, second, string_in_first, p, final, string, reached, n_history) if n_history else None,
+        s_star=p.s_star,
         t_star=first.t_end,
         v_star=v_star,
-        w_star=a.displacement,
-        damage=a.crush,
-        t_string=t_string,
-        **rest,
+        w_star=first.y_end.displacement,
+        damage=crush + jnp.where(reached, string.crush, 0.0),
+        t_string=jnp.where(reached, t_string, jnp.inf),
+        string_work=jnp.where(reached, string.stretching_work, 0.0),
+        string_steps=string.num_steps,
+        string_finished=string.finished,
+        **final,
     )
 
 
-def _history(first, second, p: _Params, v_star, rest, n_history):
+def _history(first, second, string_in_first, p: _Params, final, string: StringStage, reached, n_history):
     """Phase 1 uniform in time (n_history samples), phase 2 uniform in sigma after its
-    start up to where the solve stopped (n_history - 1), then the state at rest."""
+    start up to where it stopped (n_history - 1), the string stage uniform in time
+    (n_history), then the state at rest. A stage that does not occur repeats the state it
+    would have started from (phase 2 when the string begins in phase 1; the string when
+    the beam comes to rest)."""
     k = jnp.linspace(0.0, 1.0, n_history)
     a = jax.vmap(first.dense.evaluate)(first.t_end * k)
     sigma = second.t_end * k[1:]
     d = jax.vmap(second.dense.evaluate)(sigma)
-    v = v_star * jnp.exp(-sigma)
+    d = jax.tree.map(  # no second phase: its block repeats the end of the first
+        lambda x, y: jnp.where(string_in_first, y, x), d, _decelerating_start(first, p)
+    )
+    v = a.beam_velocity[-1] * jnp.exp(-sigma)
     n1, _ = _axial(a.displacement, p)
     n2, acceleration, _ = _decelerating_rates(d.hinge, d.displacement, p)
-    n_rest, _ = _axial(rest["w_final"], p)
-
-    def joined(first_phase, second_phase, at_rest):
-        return jnp.concatenate([first_phase, second_phase, jnp.atleast_1d(at_rest)])
-
-    return {
-        "time": joined(first.t_end * k, d.time, rest["t_final"]),
-        "vehicle_velocity": joined(a.vehicle_velocity, v, 0.0),
-        "barrier_velocity": joined(a.beam_velocity, v, 0.0),
-        "hinge": joined(p.s_star + a.hinge_offset, d.hinge, rest["s_final"]),
-        "displacement": joined(a.displacement, d.displacement, rest["w_final"]),
-        "contact_force": joined(jnp.full_like(k, p.phi), -p.mu * acceleration, 0.0),
-        "crush": joined(a.crush, jnp.full_like(sigma, a.crush[-1]), a.crush[-1]),
-        "backing_work": joined(a.backing_work, d.backing_work, rest["backing_work"]),
-        "hinge_work": joined(
-            a.bending_work + a.stretching_work,
-            d.bending_work + d.stretching_work,
-            rest["bending_work"] + rest["stretching_work"],
+    s2 = string.history
+    beam = {
+        "time": jnp.concatenate([first.t_end * k, d.time]),
+        "vehicle_velocity": jnp.concatenate(
+            [a.vehicle_velocity, jnp.where(string_in_first, a.vehicle_velocity[-1], v)]
         ),
-        "axial_force": joined(n1, n2, n_rest),
+        "barrier_velocity": jnp.concatenate([a.beam_velocity, v]),
+        "hinge": jnp.concatenate([p.s_star + a.hinge_offset, d.hinge]),
+        "displacement": jnp.concatenate([a.displacement, d.displacement]),
+        "contact_force": jnp.concatenate(
+            [jnp.full_like(k, p.phi), jnp.where(string_in_first, p.phi, -p.mu * acceleration)]
+        ),
+        "crush": jnp.concatenate([a.crush, jnp.full_like(sigma, a.crush[-1])]),
+        "backing_work": jnp.concatenate([a.backing_work, d.backing_work]),
+        "hinge_work": jnp.concatenate(
+            [a.bending_work + a.stretching_work, d.bending_work + d.stretching_work]
+        ),
+        "string_work": jnp.zeros(2 * n_history - 1, k.dtype),
+        "axial_force": jnp.concatenate([n1, n2]),
     }
+    beam["beam_kinetic_energy"] = beam["barrier_velocity"] ** 2 * beam["hinge"] / 3.0
+    # The string starts from the last beam sample (phase 2's last, or phase 1's).
+    last = {key: value[-1] for key, value in beam.items()}
+    at_rest = {
+        "time": final["t_final"],
+        "vehicle_velocity": 0.0,
+        "barrier_velocity": 0.0,
+        "hinge": final["s_final"],
+        "displacement": final["w_final"],
+        "contact_force": 0.0,
+        "crush": last["crush"] + jnp.where(reached, string.crush, 0.0),
+        "backing_work": final["backing_work"],
+        "hinge_work": final["bending_work"] + final["stretching_work"],
+        "string_work": jnp.where(reached, string.stretching_work, 0.0),
+        "axial_force": jnp.minimum(_axial(final["w_final"], p)[0], 1.0),
+        "beam_kinetic_energy": 0.0,
+    }
+    on_string = {
+        "time": last["time"] + s2["time"],
+        "vehicle_velocity": s2["vehicle_velocity"],
+        "barrier_velocity": s2["barrier_velocity"],
+        "hinge": jnp.full_like(k, final["s_final"]),
+        "displacement": s2["displacement"],
+        "contact_force": s2["contact_force"],
+        "crush": last["crush"] + s2["crush"],
+        "backing_work": last["backing_work"] + s2["backing_work"],
+        "hinge_work": jnp.full_like(k, last["hinge_work"]),
+        "string_work": s2["string_work"],
+        "axial_force": jnp.ones_like(k),
+        "beam_kinetic_energy": s2["kinetic_energy"],
+    }
+    string_block = {
+        key: jnp.where(reached, on_string[key], jnp.broadcast_to(at_rest[key], k.shape))
+        for key in on_string
+    }
+    history = {
+        key: jnp.concatenate([beam[key], string_block[key], jnp.atleast_1d(at_rest[key])])
+        for key in beam
+    }
+    history["profile"] = jnp.where(reached, s2["profile"], 0.0)
+    return history

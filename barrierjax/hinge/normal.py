@@ -66,13 +66,15 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from jaxtyping import Array, Float
+
 from .. import _checks
 from .._custom_types import Scalar, Vector
 from .._solve.phases import sigma_end as _sigma_end
 from .._solve.phases import solve_phase
 from .._solve.quadrature import gauss_legendre, jacobi_product_nodes, jacobi_product_weights
 from .._solve.sensitivity import forward_jacobian_jvp
-from .axial import axial_beam_stage
+from .axial import axial_impact
 
 
 class NormalImpactHistory(eqx.Module):
@@ -80,6 +82,13 @@ class NormalImpactHistory(eqx.Module):
 
     The first half of the samples covers the accelerative phase, the second the
     decelerative phase. Energies are in units of P_b L.
+
+    With axial force (report 3.4) a third block of `n_history` samples covers the
+    plastic-string stage, before the final sample at rest; a stage that does not occur
+    repeats the state it would have started from. `beam_kinetic_energy` is then the
+    string's in that block, `string_work` the plastic work of stretching it since
+    `t_string`, and `string_profile` (n_history, cells + 1) its displacement at the
+    nodes X_j = s_final j / cells of the half-span during the string stage.
     """
 
     time: Vector
@@ -94,6 +103,8 @@ class NormalImpactHistory(eqx.Module):
     beam_kinetic_energy: Vector
     vehicle_kinetic_energy: Vector
     axial_force: Vector | None = None  # N/N0, with axial force (report 3.4) only
+    string_work: Vector | None = None
+    string_profile: Float[Array, "samples nodes"] | None = None
 
 
 class NormalImpact(eqx.Module):
@@ -109,6 +120,11 @@ class NormalImpact(eqx.Module):
       hinges' stretching, N times the beam's elongation);
     - `t_string`: with axial force (report 3.4), the time at which N reaches N0 and the
       beam becomes a plastic string; `inf` if it never does (and always without);
+    - `string_work`: the plastic work of N0 stretching the string after `t_string`
+      (3.4.45), 0 without a string stage. The final state is then the string's: `s_final`
+      is the span that moved, `damage` includes the crush in the string stage and, where
+      the string began while the vehicle still crushed, `t_star`, `v_star` and `w_star`
+      describe the beam at `t_string`;
     - `history`: a `NormalImpactHistory`, or None when not requested.
 
     With force ratio <= 1 the barrier stays rigid (no hinge: S = 0, W = 0) and the
@@ -127,6 +143,7 @@ class NormalImpact(eqx.Module):
     backing_work: Scalar
     hinge_work: Scalar
     t_string: Scalar
+    string_work: Scalar
     history: NormalImpactHistory | None
 
 
@@ -556,15 +573,17 @@ def _ode_history(first, second, dec, final, n_history, sigma_end, time_unit):
 # Public function.
 
 
-def _rigid_barrier(mu, phi, speed, n_history, axial=False) -> NormalImpact:
+def _rigid_barrier(mu, phi, speed, n_history, string_cells=None) -> NormalImpact:
     """phi <= 1: the barrier never yields and the vehicle crushes to rest at P0 (with
-    `axial`, its history has N/N0 = 0)."""
+    `string_cells`, the history has the blocks and fields of one with axial force, at
+    N/N0 = 0 and without a string)."""
     zero = jnp.zeros_like(mu)
     t_stop = mu * speed / phi
     damage = 0.5 * mu * speed**2 / phi
     history = None
     if n_history:
-        t = t_stop * jnp.linspace(0.0, 1.0, 2 * n_history)
+        axial = string_cells is not None
+        t = t_stop * jnp.linspace(0.0, 1.0, (3 if axial else 2) * n_history)
         vehicle = speed - phi / mu * t
         zeros = jnp.zeros_like(t)
         history = NormalImpactHistory(
@@ -580,6 +599,8 @@ def _rigid_barrier(mu, phi, speed, n_history, axial=False) -> NormalImpact:
             beam_kinetic_energy=zeros,
             vehicle_kinetic_energy=0.5 * mu * vehicle**2,
             axial_force=zeros if axial else None,
+            string_work=zeros if axial else None,
+            string_profile=jnp.zeros((n_history, string_cells + 1)) if axial else None,
         )
     return NormalImpact(
         s_star=zero,
@@ -594,6 +615,7 @@ def _rigid_barrier(mu, phi, speed, n_history, axial=False) -> NormalImpact:
         backing_work=zero,
         hinge_work=zero,
         t_string=zero + jnp.inf,
+        string_work=zero,
         history=history,
     )
 
@@ -615,6 +637,11 @@ def _scaled_history(raw, mu, speed) -> NormalImpactHistory:
     speed, with the kinetic energies."""
     vehicle = raw["vehicle_velocity"] * speed
     beam = raw["barrier_velocity"] * speed
+    if "beam_kinetic_energy" in raw:
+        beam_kinetic_energy = raw["beam_kinetic_energy"] * speed**2
+    else:
+        beam_kinetic_energy = beam**2 * raw["hinge"] / 3.0  # v = V (1 - |X|/S) (3.2.1)
+    string_work = raw.get("string_work")
     return NormalImpactHistory(
         time=raw["time"] * speed,
         vehicle_velocity=vehicle,
@@ -625,9 +652,11 @@ def _scaled_history(raw, mu, speed) -> NormalImpactHistory:
         crush=raw["crush"] * speed**2,
         backing_work=raw["backing_work"] * speed**2,
         hinge_work=raw["hinge_work"] * speed**2,
-        beam_kinetic_energy=beam**2 * raw["hinge"] / 3.0,
+        beam_kinetic_energy=beam_kinetic_energy,
         vehicle_kinetic_energy=0.5 * mu * vehicle**2,
         axial_force=raw.get("axial_force"),
+        string_work=None if string_work is None else string_work * speed**2,
+        string_profile=raw["profile"] * speed**2 if "profile" in raw else None,
     )
 
 
@@ -658,28 +687,37 @@ def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
         backing_work=final["backing_work"] * speed**2,
         hinge_work=final["hinge_work"] * speed**2,
         t_string=jnp.full_like(mu, jnp.inf),
+        string_work=jnp.zeros_like(mu),
         history=history,
     )
     rigid = _rigid_barrier(mu, phi, speed, n_history)
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
 
 
-@functools.partial(jax.jit, static_argnames=("rtol", "n_history"))
-def _normal_impact_axial(mu, phi, speed, eta0, *, rtol, n_history):
-    """With axial force (report 3.4, `axial.py`): the beam stage by time integration; in
-    the speed-free variables the speed enters through eta0 V^2."""
+@functools.partial(
+    jax.jit, static_argnames=("rtol", "n_history", "string_cells", "string_courant")
+)
+def _normal_impact_axial(mu, phi, speed, eta0, *, rtol, n_history, string_cells, string_courant):
+    """With axial force (report 3.4, `axial.py` and `string.py`): the beam stage by time
+    integration, then the plastic string where N reaches N0; in the speed-free variables
+    the speed enters through eta0 V^2."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)
-    stage = forward_jacobian_jvp(
-        functools.partial(axial_beam_stage, rtol=rtol, n_history=n_history)
+    stages = forward_jacobian_jvp(
+        functools.partial(
+            axial_impact,
+            rtol=rtol,
+            n_history=n_history,
+            string_cells=string_cells,
+            string_courant=string_courant,
+        )
     )
-    r = stage(mu, safe_phi, eta0 * speed**2)
+    r = stages(mu, safe_phi, eta0 * speed**2)
     history = _scaled_history(r["history"], mu, speed) if n_history else None
-    t_string = eqx.error_if(
-        r["t_string"] * speed,
-        jnp.isfinite(r["t_string"]) & yields,
-        "axial_ratio: N reaches N0 and the beam becomes a plastic string (report 3.4.45) "
-        "before it comes to rest; the string stage is not solved yet",
+    t_final = eqx.error_if(
+        r["t_final"] * speed,
+        ~r["string_finished"] & yields,
+        "the plastic string stage did not come to rest within its step budget",
     )
     result = NormalImpact(
         s_star=r["s_star"],
@@ -688,15 +726,16 @@ def _normal_impact_axial(mu, phi, speed, eta0, *, rtol, n_history):
         w_star=r["w_star"] * speed**2,
         damage=r["damage"] * speed**2,
         s_final=r["s_final"],
-        t_final=r["t_final"] * speed,
+        t_final=t_final,
         w_final=r["w_final"] * speed**2,
         crush_work=safe_phi * r["damage"] * speed**2,
         backing_work=r["backing_work"] * speed**2,
         hinge_work=(r["bending_work"] + r["stretching_work"]) * speed**2,
-        t_string=t_string,
+        t_string=r["t_string"] * speed,
+        string_work=r["string_work"] * speed**2,
         history=history,
     )
-    rigid = _rigid_barrier(mu, phi, speed, n_history, axial=True)
+    rigid = _rigid_barrier(mu, phi, speed, n_history, string_cells=string_cells)
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
 
 
@@ -710,6 +749,8 @@ def normal_impact(
     n_history: int = 0,
     solver: diffrax.AbstractSolver | None = None,
     axial_ratio=None,
+    string_cells: int = 128,
+    string_courant: float = 1.0,
 ) -> NormalImpact:
     """Normal impact of a rigid-plastic vehicle on a rigid-plastic beam on a rigid-plastic
     backing (report 3.2), in the report's dimensionless variables.
@@ -731,6 +772,11 @@ def normal_impact(
       `None` or `0` is the model of 3.2, compiled without any axial term. Otherwise the
       beam stage of 3.4 is integrated in time (it has no closed form; `method` must be
       `"ode"`), `t_string` reports where N reaches N0, and the history has `axial_force`.
+      Where N reaches N0 the motion goes on to rest as a plastic string (3.4.45),
+      solved by finite elements and leapfrog (`string.py`).
+    - `string_cells`: elements over the string's half-span (with `axial_ratio`).
+    - `string_courant`: the string's time step over its element's wave transit time,
+      in (0, 1] (1: exact for the free string; with `axial_ratio`).
 
     Scalars, or arrays of one shape (solved in cache-sized vmapped chunks: the fastest
     way to run a large sweep); `jax.vmap` and `jax.grad` work with respect to any
@@ -752,9 +798,17 @@ def normal_impact(
                 f"no closed form; got {method!r}"
             )
         eta0 = _checks.non_negative("axial_ratio", axial_ratio)
+        if int(string_cells) != string_cells or string_cells < 2:
+            raise ValueError(f"string_cells must be an integer >= 2; got {string_cells!r}")
+        if not 0.0 < string_courant <= 1.0:
+            raise ValueError(f"string_courant must be in (0, 1]; got {string_courant!r}")
         args = jnp.broadcast_arrays(mu, phi, speed, eta0)
         solve = functools.partial(
-            _normal_impact_axial, rtol=float(rtol), n_history=int(n_history)
+            _normal_impact_axial,
+            rtol=float(rtol),
+            n_history=int(n_history),
+            string_cells=int(string_cells),
+            string_courant=float(string_courant),
         )
         for _ in range(args[0].ndim):
             solve = jax.vmap(solve)
