@@ -106,23 +106,6 @@ def test_vmap_equals_loop():
             )
 
 
-def test_gradients_match_finite_differences():
-    x0 = np.array([0.5, 2.0, 1.0, 2.5])  # mu, phi, speed, eta0
-
-    def outputs(x):
-        r = _axial(*x)
-        return jnp.stack([r.w_final, r.damage, r.t_final])
-
-    jacobian = np.asarray(jax.jacfwd(outputs)(jnp.asarray(x0)))
-    for j in range(4):
-        step = 1e-5 * x0[j]
-        up, down = x0.copy(), x0.copy()
-        up[j] += step
-        down[j] -= step
-        fd = (np.asarray(outputs(up)) - np.asarray(outputs(down))) / (2 * step)
-        np.testing.assert_allclose(jacobian[:, j], fd, rtol=2e-5, atol=1e-8, err_msg=str(j))
-
-
 @pytest.mark.parametrize(
     "kwargs, field",
     [

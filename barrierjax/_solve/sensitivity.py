@@ -11,6 +11,7 @@ for `jax.grad` as J^T times the cotangent, never touching the solver's loop.
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 
 def forward_jacobian_jvp(fn):
@@ -34,6 +35,12 @@ def forward_jacobian_jvp(fn):
 
         out, jacobian = jax.vmap(along, out_axes=(None, 0))(basis)
         tangent = jnp.stack(tangents)
-        return out, jax.tree.map(lambda j: jnp.tensordot(tangent, j, axes=1), jacobian)
+
+        def along_tangent(j, o):
+            if jnp.issubdtype(o.dtype, jnp.inexact):
+                return jnp.tensordot(tangent, j, axes=1)
+            return np.zeros(o.shape, jax.dtypes.float0)  # counts and flags
+
+        return out, jax.tree.map(along_tangent, jacobian, out)
 
     return wrapped

@@ -117,7 +117,9 @@ def _kick(state: _State, h, t_old, grid: _Grid) -> _State:
     contact_force = jnp.where(opens, 0.0, jnp.where(crushing, grid.phi, grid.mu * (u - stuck) / h))
     velocity = velocity.at[0].set(new_v0)
     trial = trial.at[0].set(centre_trial)
-    vehicle_trial = jnp.where(opens, u, jnp.where(crushing, crush_u, stuck_trial))
+    # A vehicle that stops in contact stops under at most phi: where that happens within
+    # the kick is interpolated on the crushing trajectory (exact if it crushes to rest).
+    vehicle_trial = jnp.where(opens, u, crush_u)
     stop_time = jnp.maximum(
         state.stop_time,
         jnp.maximum(
@@ -136,7 +138,7 @@ def _last_stop(old, trial, new, t_old, h):
     """The latest time at which a velocity that was positive reached zero in this kick,
     interpolated linearly between `old` and the unprojected `trial` (-inf if none did)."""
     stopped = (old > 0.0) & (new <= 0.0)
-    fraction = old / jnp.where(stopped, old - trial, 1.0)
+    fraction = jnp.clip(old / jnp.where(stopped, old - trial, 1.0), 0.0, 1.0)
     return jnp.max(jnp.where(stopped, t_old + h * fraction, -jnp.inf))
 
 
