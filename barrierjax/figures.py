@@ -657,7 +657,7 @@ def _figure_3_4_5() -> Figure:
 # Section 3.4, axial force: the dynamic beam stage.
 
 EXAMPLE_3_4_9 = {"mass_ratio": 0.5, "force_ratio": 2.0, "speed": 1.0}
-AXIAL_RATIOS_3_4_9 = (0.0, 2.0, 2.5, 5.0)
+AXIAL_RATIOS_3_4_9 = (0.0, 2.0, 2.5, 5.0, 10.0)  # 10: the string stage is reached
 
 
 @figure("3.4.9", "Resulting Curves of the Example in Section 3.4 (ii)")
@@ -681,6 +681,8 @@ def _figure_3_4_9() -> Figure:
         t = h.time[k]
         reduction = 100.0 * (1.0 - float(result.w_final[k]) / w_plain)
         label = rf"$\eta_0$ = {eta:g}" + (f": $W_f$ {-reduction:+.1f} %" if eta else "")
+        if np.isfinite(result.t_string[k]):
+            label += f", string from T = {float(result.t_string[k]):.3f}"
         ax_s.plot(t, h.hinge[k], color=f"C{k}", label=label)
         ax_v.plot(t, h.barrier_velocity[k], color=f"C{k}")
         ax_w.plot(t, h.displacement[k], color=f"C{k}")

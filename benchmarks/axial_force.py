@@ -15,13 +15,19 @@ It prints tables and writes `axial_force.json` and PNG plots to `--out` (default
     numpy, with finite-difference partial derivatives where the scan garbles them), at step
     sizes dT = 0.05 .. 1e-4. The report quotes 2.5 % (eta0 = 2) and 12.5 % (eta0 = 5).
 (b) error against run time: rtol 1e-4 .. 1e-10 against the same model at rtol 1e-12, over
-    random scenarios whose eta0 keeps N below N0 (n_final < 0.9, so that no scenario reaches
-    the plastic string, which is not solved yet); error = max relative error of t_final,
+    random scenarios whose eta0 keeps N below N0 (n_final < 0.9: the beam stage alone; the
+    string stage is (e)); error = max relative error of t_final,
     w_final, damage and s_final. Time per scenario of one vmapped call, after a warm-up.
 (c) throughput against batch size at rtol 1e-6, beside `normal_impact(..., method="ode")`
     without axial force (diffrax Tsit5) on the same inputs, in the same run.
 (d) gradient cost: jax.grad of sum(w_final + damage + t_final) with respect to all four inputs
     over a vmapped batch, over the forward call's cost.
+(e) the plastic-string stage: four scenarios that reach it (after the crushing, during it,
+    and two more), string grids of 16 .. 1024 cells at Courant numbers 1 and 0.5, against
+    4096 cells at Courant 1: errors of w_final, damage and t_final, the energy balance, the
+    observed orders, the time per scenario, the share of plastic flow outside the flow
+    rule's corner cone; then throughput and gradient cost over random scenarios that reach
+    the string, beside the ODE of 3.2.
 
 Timing protocol: one warm-up call (compile, reported separately), then the best of 3 calls.
 A benchmark reports; it never tunes the model.
@@ -56,6 +62,9 @@ def config(quick: bool) -> dict:
             "rtols": (1e-6,),
             "batches": (4,),
             "grad_batch": 4,
+            "string_cells": (16, 32),
+            "string_reference_cells": 64,
+            "string_batches": (4,),
         }
     return {
         "report_steps": (0.05, 0.02, 0.01, 0.005, 0.001, 0.0001),
@@ -63,6 +72,9 @@ def config(quick: bool) -> dict:
         "rtols": (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10),
         "batches": (1, 10, 100, 1000, 10000),
         "grad_batch": 256,
+        "string_cells": (16, 32, 64, 128, 256, 512, 1024),
+        "string_reference_cells": 4096,
+        "string_batches": (100, 1000),
     }
 
 
@@ -269,13 +281,113 @@ def section_gradient(cfg, seed):
     }
 
 
+# --------------------------------------------------------------------------------------
+# (e) the plastic-string stage.
+
+STRING_CASES = ((0.5, 2.0, 1.0, 10.0), (5.0, 1.5, 1.0, 5.0), (2.0, 4.0, 1.5, 4.0), (0.5, 2.0, 2.0, 10.0))
+
+
+def string_scenarios(n, seed):
+    """Random scenarios whose beam would pass N = N0: eta0 with 2 eta0 W_f(eta0 = 0) in
+    [2, 6] (the axial force stiffens the beam, so some of them still stop short)."""
+    rng = np.random.default_rng(seed)
+    mu = 10 ** rng.uniform(-1, 1.5, n)
+    phi = 10 ** rng.uniform(0.05, 0.9, n)
+    speed = 10 ** rng.uniform(-1, 0.3, n)
+    w0 = np.asarray(normal_impact(mu, phi, speed).w_final)
+    eta0 = rng.uniform(2.0, 6.0, n) / (2.0 * w0)
+    return tuple(jnp.asarray(x) for x in (mu, phi, speed, eta0))
+
+
+def _string_fields(r, mu, speed):
+    work = r.crush_work + r.backing_work + r.hinge_work + r.string_work
+    energy = np.abs(np.asarray(work) / (0.5 * np.asarray(mu) * np.asarray(speed) ** 2) - 1.0)
+    return {k: np.asarray(getattr(r, k)) for k in ("w_final", "damage", "t_final")}, energy
+
+
+def section_string(cfg, seed):
+    mu, phi, speed, eta0 = (jnp.asarray(x) for x in zip(*STRING_CASES))
+
+    def solve(cells, courant, n_history=0):
+        return normal_impact(
+            mu, phi, speed, method="ode", rtol=1e-11, axial_ratio=eta0,
+            string_cells=cells, string_courant=courant, n_history=n_history,
+        )
+
+    reference, _ = _string_fields(solve(cfg["string_reference_cells"], 1.0), mu, speed)
+    print(
+        f"\n(e) plastic string, {len(STRING_CASES)} scenarios (mu, phi, V, eta0) = {STRING_CASES};"
+        f"\n    reference {cfg['string_reference_cells']} cells at Courant 1; max relative errors"
+    )
+    print(f"    {'courant':>7s} {'cells':>6s} {'w_final':>9s} {'damage':>9s} {'t_final':>9s} "
+          f"{'energy':>9s} {'ms/scen':>8s}")
+    rows = []
+    for courant in (1.0, 0.5):
+        for cells in cfg["string_cells"]:
+            seconds, _ = best_of(lambda cells=cells, courant=courant: solve(cells, courant).w_final)
+            values, energy = _string_fields(solve(cells, courant), mu, speed)
+            errors = {k: float(np.max(np.abs(values[k] / reference[k] - 1.0))) for k in values}
+            row = {"courant": courant, "cells": cells, **errors, "energy": float(np.max(energy)),
+                   "seconds_per_scenario": seconds / len(STRING_CASES)}
+            rows.append(row)
+            print(f"    {courant:7.1f} {cells:6d} {errors['w_final']:9.2e} {errors['damage']:9.2e} "
+                  f"{errors['t_final']:9.2e} {row['energy']:9.2e} {row['seconds_per_scenario'] * 1e3:8.2f}")
+    orders = {}
+    for courant in (1.0, 0.5):
+        sub = [r for r in rows if r["courant"] == courant]
+        for key in ("w_final", "t_final", "energy"):
+            pts = np.log([[r["cells"], max(r[key], 1e-16)] for r in sub])
+            if len(pts) > 2:
+                orders[f"{key}_courant_{courant:g}"] = -np.polyfit(pts[:, 0], pts[:, 1], 1)[0]
+    if orders:
+        print("    observed orders in cells (least squares over the grids): " + ", ".join(
+            f"{k} {v:.1f}" for k, v in orders.items()))
+    h = solve(cfg["string_cells"][-1], 1.0, n_history=2).history
+    moving = np.asarray(h.string_flow_rule)
+    flow = [
+        {"case": STRING_CASES[i], "mean_share": float(np.mean(moving[i, :-1])),
+         "nodes_mostly_outside": float(np.mean(moving[i, :-1] > 0.5))}
+        for i in range(len(STRING_CASES))
+    ]
+    print("    flow rule's corner cone N0 eps' >= 2 M0 |kappa'| (3.4.49 corrected), share of each"
+          " node's moving time outside it, mean over the nodes:")
+    for f in flow:
+        print(f"      {f['case']}: {f['mean_share']:.2f} (nodes mostly outside: "
+              f"{f['nodes_mostly_outside']:.0%})")
+    throughput = []
+    print("    throughput at rtol 1e-6, 128 cells, random scenarios past N = N0, per scenario (us):")
+    print(f"    {'batch':>7s} {'string':>9s} {'reached':>8s} {'3.2 ODE':>9s} {'ratio':>6s}")
+    for batch in cfg["string_batches"]:
+        inputs = string_scenarios(batch, seed + batch)
+        call = functools.partial(normal_impact, *inputs[:3], method="ode", rtol=1e-6, axial_ratio=inputs[3])
+        axial, _ = best_of(call)
+        reached = float(np.mean(np.isfinite(np.asarray(call().t_string))))
+        plain, _ = best_of(functools.partial(normal_impact, *inputs[:3], method="ode", rtol=1e-6))
+        throughput.append({"batch": batch, "axial_s": axial / batch, "ode_s": plain / batch,
+                           "reached": reached, "ratio": axial / plain})
+        print(f"    {batch:7d} {axial / batch * 1e6:9.1f} {reached:8.0%} {plain / batch * 1e6:9.1f} "
+              f"{axial / plain:6.1f}")
+    inputs = string_scenarios(cfg["string_batches"][0], seed + 11)
+
+    def total(*x):
+        r = normal_impact(*x[:3], method="ode", rtol=1e-8, axial_ratio=x[3])
+        return jnp.sum(r.w_final + r.damage + r.t_final)
+
+    forward, _ = best_of(lambda: total(*inputs))
+    gradient, _ = best_of(lambda: jax.grad(total, argnums=(0, 1, 2, 3))(*inputs))
+    print(f"    gradient over {len(inputs[0])} such scenarios, 4 inputs: forward {forward * 1e3:.1f} ms,"
+          f" gradient {gradient * 1e3:.1f} ms, ratio {gradient / forward:.2f}")
+    return {"rows": rows, "orders": orders, "flow_rule": flow, "throughput": throughput,
+            "gradient": {"forward_s": forward, "gradient_s": gradient, "ratio": gradient / forward}}
+
+
 def plots(out, data):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.2))
     rows = data["error_vs_time"]["rows"]
     axes[0].loglog(
         [r["seconds_per_scenario"] * 1e6 for r in rows], [r["error"] for r in rows], "o-"
@@ -301,6 +413,16 @@ def plots(out, data):
     axes[1].set_title("(a) the report's example, mu 0.5, phi 2, V 1")
     axes[1].legend(fontsize=7)
     axes[1].grid(True, alpha=0.3)
+    for courant, style in ((1.0, "-"), (0.5, "--")):
+        sub = [r for r in data["string"]["rows"] if r["courant"] == courant]
+        for key, color in (("w_final", "C0"), ("t_final", "C1"), ("energy", "C2")):
+            axes[2].loglog([r["cells"] for r in sub], [max(r[key], 1e-16) for r in sub], "o" + style,
+                           color=color, ms=3, label=f"{key}, Courant {courant:g}")
+    axes[2].set_xlabel("string cells over the half-span")
+    axes[2].set_ylabel("max relative error / energy imbalance")
+    axes[2].set_title("(e) plastic string: refinement")
+    axes[2].legend(fontsize=7)
+    axes[2].grid(True, which="both", alpha=0.3)
     save(fig, out / "axial_force.png")
 
 
@@ -319,6 +441,7 @@ def main(argv=None):
     data["error_vs_time"] = section_error_vs_time(cfg, inputs)
     data["throughput"] = section_throughput(cfg, args.seed)
     data["gradient"] = section_gradient(cfg, args.seed)
+    data["string"] = section_string(cfg, args.seed)
     data["meta"] = meta(args, load_start, sources_start, sources_changed(sources_start))
     (args.out / "axial_force.json").write_text(json.dumps(data, indent=1, default=float))
     if not args.no_plots:

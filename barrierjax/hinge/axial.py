@@ -473,4 +473,7 @@ def _history(first, second, string_in_first, p: _Params, final, string: StringSt
         for key in beam
     }
     history["profile"] = jnp.where(reached, s2["profile"], 0.0)
+    # Per node, the share of its moving time outside the flow rule's corner cone.
+    share = string.flow_rule_violated / jnp.where(string.moving_time > 0, string.moving_time, 1.0)
+    history["flow_rule"] = jnp.append(jnp.where(reached, share, 0.0), 0.0)
     return history

@@ -88,7 +88,10 @@ class NormalImpactHistory(eqx.Module):
     repeats the state it would have started from. `beam_kinetic_energy` is then the
     string's in that block, `string_work` the plastic work of stretching it since
     `t_string`, and `string_profile` (n_history, cells + 1) its displacement at the
-    nodes X_j = s_final j / cells of the half-span during the string stage.
+    nodes X_j = s_final j / cells of the half-span during the string stage, and
+    `string_flow_rule` (cells + 1) the share of each node's moving time in which the
+    plastic flow lies outside the flow rule's corner cone, N0 eps' >= 2 M0 |kappa'|
+    (the report's (3.4.49), corrected: `string.py`).
     """
 
     time: Vector
@@ -105,6 +108,7 @@ class NormalImpactHistory(eqx.Module):
     axial_force: Vector | None = None  # N/N0, with axial force (report 3.4) only
     string_work: Vector | None = None
     string_profile: Float[Array, "samples nodes"] | None = None
+    string_flow_rule: Float[Array, " nodes"] | None = None
 
 
 class NormalImpact(eqx.Module):
@@ -601,6 +605,7 @@ def _rigid_barrier(mu, phi, speed, n_history, string_cells=None) -> NormalImpact
             axial_force=zeros if axial else None,
             string_work=zeros if axial else None,
             string_profile=jnp.zeros((n_history, string_cells + 1)) if axial else None,
+            string_flow_rule=jnp.zeros(string_cells + 1) if axial else None,
         )
     return NormalImpact(
         s_star=zero,
@@ -657,6 +662,7 @@ def _scaled_history(raw, mu, speed) -> NormalImpactHistory:
         axial_force=raw.get("axial_force"),
         string_work=None if string_work is None else string_work * speed**2,
         string_profile=raw["profile"] * speed**2 if "profile" in raw else None,
+        string_flow_rule=raw.get("flow_rule"),
     )
 
 
