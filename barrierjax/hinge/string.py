@@ -54,9 +54,9 @@ from .._custom_types import Scalar
 
 class StringStart(eqx.Module):
     """The string's state when N reaches N0 (speed-free variables): its half-span, its
-    displacement at the nodes X_j = span j / cells (j = 0..cells, the last is 0), the
-    velocities of the centre and the vehicle, whether the vehicle still crushes, and the
-    crush so far."""
+    displacement at the nodes X_j = span j / cells (j = 0..cells, the last is 0), and the
+    velocities of the centre (the string's velocity is the beam's, v0 (1 - X/span),
+    (3.4.46)) and of the vehicle (faster than the centre while it still crushes)."""
 
     span: Scalar
     displacement: Float[Array, " nodes"]
@@ -103,7 +103,7 @@ def _kick(state: _State, h, t_old, grid: _Grid) -> _State:
     velocity = jnp.maximum(trial, 0.0)
     # The centre node and the vehicle (half of each: the half-string carries Phi/2).
     m0, half_mu, half_phi = grid.mass[0], 0.5 * grid.mu, 0.5 * grid.phi
-    v0, u = state.velocity[0], state.vehicle_velocity
+    u = state.vehicle_velocity
     free_v0 = velocity[0]
     opens = state.gap + grid.dt * (free_v0 - u) > 0.0
     crush_u = u - h * half_phi / half_mu
