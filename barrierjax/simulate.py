@@ -189,8 +189,8 @@ def simulate(
       `vmap` over angles needs): report 3.3 by `barrierjax.hinge.oblique_impact` with
       `rtol` (`method` does not apply; see that module for its current limits).
     - With `Barrier.axial_capacity` (a normal impact only): the beam stage of report 3.4,
-      integrated in time whatever `method` (it has no closed form); a run that reaches the
-      plastic string stops with an error that says so (that stage is not solved yet).
+      integrated in time whatever `method` (it has no closed form), and where N reaches
+      N0 the plastic-string stage (3.4.45) to rest.
     """
     if _is_normal(scene, oblique):
         scene = _require_normal_angle(scene)

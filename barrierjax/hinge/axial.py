@@ -42,9 +42,9 @@ cubic (3.4.40), S^3 + 3 mu S^2 - 3 (1 + n_f^2) S - 3 mu (1 + n_f^2) = 0, n_f = 2
 All of it runs in the speed-free variables of `normal.py` (tau = T/V, v = V0/V, w = W0/V^2
 for the impact speed V): n = 2 eta w with eta = eta0 V^2, so the speed enters through eta.
 
-The beam stage ends where n reaches 1 (eta0 W0 = 1/2, (3.4.43)): the beam is then a
-plastic string (3.4.45), whose motion this module does not solve; `t_string` reports
-where it begins.
+The beam stage ends where n reaches 1 (eta0 W0 = 1/2, (3.4.43)), at `t_string`: the beam
+is then a plastic string (3.4.45), which `string.py` carries to rest from the initial
+conditions (3.4.46) built here.
 """
 
 import diffrax
@@ -473,7 +473,5 @@ def _history(first, second, string_in_first, p: _Params, final, string: StringSt
         for key in beam
     }
     history["profile"] = jnp.where(reached, s2["profile"], 0.0)
-    # Per node, the share of its moving time outside the flow rule's corner cone.
-    share = string.flow_rule_violated / jnp.where(string.moving_time > 0, string.moving_time, 1.0)
-    history["flow_rule"] = jnp.append(jnp.where(reached, share, 0.0), 0.0)
+    history["flow_rule"] = jnp.where(reached, s2["flow_rule"], 0.0)
     return history

@@ -74,8 +74,9 @@ class _State(eqx.Module):
     crush: Scalar
     backing_work: Scalar
     stop_time: Scalar  # when the last motion so far ended
-    flow_rule_violated: Float[Array, " nodes"]  # time each node spent outside the cone
-    moving_time: Float[Array, " nodes"]  # time each node spent moving
+    # Only with a history: the time each node spent moving and, of that, outside the cone.
+    moving_time: Float[Array, " nodes"] | None
+    flow_rule_violated: Float[Array, " nodes"] | None
     recorder: "_Recorder | None"
 
 
@@ -149,9 +150,8 @@ def _drift(state: _State, grid: _Grid) -> _State:
     relative = dt * (state.vehicle_velocity - state.velocity[0])  # approach of the vehicle
     crush = state.crush + jnp.maximum(relative - state.gap, 0.0)
     gap = jnp.maximum(state.gap - relative, 0.0)
-    moving = state.velocity > 0.0
     return eqx.tree_at(
-        lambda s: (s.step, s.displacement, s.gap, s.crush, s.backing_work, s.moving_time),
+        lambda s: (s.step, s.displacement, s.gap, s.crush, s.backing_work),
         state,
         (
             state.step + 1,
@@ -160,14 +160,14 @@ def _drift(state: _State, grid: _Grid) -> _State:
             crush,
             # (1/2) int v dX over the whole string: twice the half's lumped sum, halved.
             state.backing_work + dt * jnp.sum(grid.mass * state.velocity),
-            state.moving_time + jnp.where(moving, dt, 0.0),
         ),
     )
 
 
-def _flow_rule_violation(before: _State, after: _State, grid: _Grid):
-    """Where the corner cone of the flow rule, 4 eta w_X w_Xtau >= |w_XXtau|, fails over
-    the drift from `before` to `after`, at the nodes that moved: the extension rate
+def _book_flow_rule(before: _State, after: _State, grid: _Grid) -> _State:
+    """Add the drift from `before` to `after` to each node's moving time and, where the
+    corner cone of the flow rule, 4 eta w_X w_Xtau >= |w_XXtau|, fails, to its time
+    outside the cone: the extension rate
     w_X w_Xtau averaged from the two neighbouring elements, the curvature rate from the
     second difference of the velocities (the centre's by symmetry)."""
     w = jnp.append(0.5 * (before.displacement + after.displacement), 0.0)
@@ -179,7 +179,15 @@ def _flow_rule_violation(before: _State, after: _State, grid: _Grid):
     mirrored = jnp.concatenate([-slope_rate[:1], slope_rate[:-1]])
     curvature_rate = (slope_rate - mirrored) / grid.dx
     violated = 4.0 * grid.eta * extension_rate < jnp.abs(curvature_rate)
-    return jnp.where(violated & (before.velocity > 0.0), grid.dt, 0.0)
+    moved = before.velocity > 0.0
+    return eqx.tree_at(
+        lambda s: (s.moving_time, s.flow_rule_violated),
+        after,
+        (
+            after.moving_time + jnp.where(moved, grid.dt, 0.0),
+            after.flow_rule_violated + jnp.where(violated & moved, grid.dt, 0.0),
+        ),
+    )
 
 
 # --------------------------------------------------------------------------------------
@@ -245,9 +253,11 @@ def _sample(state: _State, before_kick: _State, grid: _Grid, stretched_at_start,
     return values, w
 
 
-def _resampled(recorder: _Recorder, last, n_history: int, duration):
+def _resampled(final: _State, last, n_history: int):
     """The recorded samples and the state at rest, linearly interpolated to n_history
-    uniform times over [0, duration]."""
+    uniform times over [0, duration]; and per node the share of its moving time outside
+    the flow rule's cone (0 at the held end)."""
+    recorder, duration = final.recorder, final.stop_time
     values, profile = last
     index = jnp.arange(recorder.samples.shape[0])
     filled = index < recorder.count
@@ -267,6 +277,9 @@ def _resampled(recorder: _Recorder, last, n_history: int, duration):
     }
     history["time"] = at
     history["profile"] = jax.vmap(interpolated, in_axes=1, out_axes=1)(profiles)
+    moved = final.moving_time > 0.0
+    share = final.flow_rule_violated / jnp.where(moved, final.moving_time, 1.0)
+    history["flow_rule"] = jnp.append(share, 0.0)
     return history
 
 
@@ -282,16 +295,13 @@ def _stretching(w, grid: _Grid):
 class StringStage(eqx.Module):
     """The string stage's outcome, speed-free: its duration, the final displacement
     profile (nodes X_j = span j / cells), the crush, backing and stretching work it adds,
-    the time each node spent moving and, of that, outside the flow rule's cone, and the
-    number of steps."""
+    the number of steps and, if asked for, the history (`plastic_string_stage`)."""
 
     duration: Scalar
     displacement: Float[Array, " nodes"]
     crush: Scalar
     backing_work: Scalar
     stretching_work: Scalar
-    moving_time: Float[Array, " nodes"]
-    flow_rule_violated: Float[Array, " nodes"]
     num_steps: Int[Array, ""]
     finished: Bool[Array, ""]
     history: dict | None
@@ -310,7 +320,8 @@ def plastic_string_stage(
     """Solve the string from `start` to rest (module docstring). With `n_history`, the
     result has `history`: that many samples uniform in time (from t_string) of the
     vehicle, the centre, the contact force, the works, the string's kinetic energy and
-    its displacement profile."""
+    its displacement profile, and per node the share of its moving time in which the
+    plastic flow lies outside the flow rule's corner cone."""
     cells = start.displacement.shape[0] - 1
     dx = start.span / cells
     mass = jnp.full(cells, dx).at[0].set(0.5 * dx)
@@ -337,8 +348,8 @@ def plastic_string_stage(
         crush=zero,
         backing_work=zero,
         stop_time=zero,
-        flow_rule_violated=jnp.zeros(cells, mu.dtype),
-        moving_time=jnp.zeros(cells, mu.dtype),
+        moving_time=jnp.zeros(cells, mu.dtype) if record else None,
+        flow_rule_violated=jnp.zeros(cells, mu.dtype) if record else None,
         recorder=recorder,
     )
     kicked = _kick(state, 0.5 * grid.dt, 0.0, grid)
@@ -355,8 +366,8 @@ def plastic_string_stage(
 
     def step(state):
         after = _drift(state, grid)
-        violated = _flow_rule_violation(state, after, grid)
-        after = eqx.tree_at(lambda s: s.flow_rule_violated, after, after.flow_rule_violated + violated)
+        if record:
+            after = _book_flow_rule(state, after, grid)
         kicked = _kick(after, grid.dt, (after.step.astype(grid.dt.dtype) - 0.5) * grid.dt, grid)
         if record:
             sample = _sample(kicked, after, grid, stretched_at_start)
@@ -368,15 +379,13 @@ def plastic_string_stage(
     history = None
     if record:
         last = _sample(final, final, grid, stretched_at_start, time=final.stop_time)
-        history = _resampled(final.recorder, last, n_history, final.stop_time)
+        history = _resampled(final, last, n_history)
     return StringStage(
         duration=final.stop_time,
         displacement=w_final,
         crush=final.crush,
         backing_work=final.backing_work,
         stretching_work=_stretching(w_final, grid) - stretched_at_start,
-        moving_time=final.moving_time,
-        flow_rule_violated=final.flow_rule_violated,
         num_steps=final.step,
         finished=final.step < max_steps,
         history=history,
