@@ -14,12 +14,14 @@ import jax.numpy as jnp
 import numpy as np
 
 
-def forward_jacobian_jvp(fn):
+def forward_jacobian_jvp(fn, n_differentiable=None):
     """`fn(*scalars) -> PyTree` with a custom JVP built from its forward Jacobian.
 
     The primal is computed once, alongside all the directional derivatives (a `vmap` of
     `jax.jvp` over the unit directions), so every derivative costs one forward solve that
-    carries `len(scalars)` tangents.
+    carries `n_differentiable` tangents. Only the first `n_differentiable` arguments
+    (default: all) are differentiated; the rest (tolerances, traced so that changing them
+    does not recompile) get no derivative.
     """
 
     @jax.custom_jvp
@@ -28,13 +30,15 @@ def forward_jacobian_jvp(fn):
 
     @wrapped.defjvp
     def _jvp(params, tangents):
-        basis = jnp.eye(len(params), dtype=jnp.result_type(*params))
+        n = len(params) if n_differentiable is None else n_differentiable
+        inputs, fixed = params[:n], params[n:]
+        basis = jnp.eye(n, dtype=jnp.result_type(*inputs))
 
         def along(direction):
-            return jax.jvp(fn, params, tuple(direction))
+            return jax.jvp(lambda *x: fn(*x, *fixed), inputs, tuple(direction))
 
         out, jacobian = jax.vmap(along, out_axes=(None, 0))(basis)
-        tangent = jnp.stack(tangents)
+        tangent = jnp.stack(tangents[:n])
 
         def along_tangent(j, o):
             if jnp.issubdtype(o.dtype, jnp.inexact):

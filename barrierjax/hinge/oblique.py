@@ -698,7 +698,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         friction_work=y.friction_work,
         slope_work=y.slope_work,
     )
-    log_rest = jnp.log(y.v0) + math.log(rtol) - 3.0
+    log_rest = jnp.log(y.v0) + jnp.log(rtol) - 3.0
 
     def contact_event(s, y, f, p, past):
         force, _ = _contact_force(y, p, past)
@@ -853,7 +853,7 @@ def _history(samples, count, p: _Params, x, displacement):
     )
 
 
-def _oblique(mu, phi, vn, vh, friction, *, rtol, max_steps, history, n_x):
+def _oblique(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x):
     p, first, second, (third, separated, theta_end) = _solve(
         mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps, history=history
     )
@@ -954,10 +954,11 @@ def oblique_impact(
     vh = _checks.non_negative("tangential_speed", tangential_speed)
     friction = _checks.non_negative("friction", friction)
     args = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
-    options = dict(rtol=float(rtol), max_steps=int(max_steps), history=bool(history), n_x=_N_X)
+    options = dict(max_steps=int(max_steps), history=bool(history), n_x=_N_X)
+    rtol = jnp.asarray(rtol, args[0].dtype)
     if args[0].ndim == 0:
-        return _oblique_chunked(*args, **options)
-    flat = _oblique_chunked(*(a.ravel() for a in args), **options)
+        return _oblique_chunked(*args, rtol, **options)
+    flat = _oblique_chunked(*(a.ravel() for a in args), rtol, **options)
     return jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), flat)
 
 
@@ -968,12 +969,14 @@ def oblique_impact(
 _CHUNK = 128
 
 
-@functools.partial(jax.jit, static_argnames=("rtol", "max_steps", "history", "n_x"))
-def _oblique_chunked(mu, phi, vn, vh, friction, **options):
-    solve = forward_jacobian_jvp(functools.partial(_oblique, **options))
+@functools.partial(jax.jit, static_argnames=("max_steps", "history", "n_x"))
+def _oblique_chunked(mu, phi, vn, vh, friction, rtol, **options):
+    solve = forward_jacobian_jvp(functools.partial(_oblique, **options), n_differentiable=5)
     if mu.ndim == 0:
-        return solve(mu, phi, vn, vh, friction)
-    return jax.lax.map(lambda x: solve(*x), (mu, phi, vn, vh, friction), batch_size=_CHUNK)
+        return solve(mu, phi, vn, vh, friction, rtol)
+    return jax.lax.map(
+        lambda x: solve(*x, rtol), (mu, phi, vn, vh, friction), batch_size=_CHUNK
+    )
 
 
 def moving_load(
@@ -989,14 +992,13 @@ def moving_load(
     )
     vh = _checks.positive("tangential_speed", tangential_speed)
     t_end = _checks.positive("t_end", t_end)
-    return _moving_load(
-        *jnp.broadcast_arrays(phi, vh, t_end), rtol=float(rtol), max_steps=int(max_steps)
-    )
+    args = jnp.broadcast_arrays(phi, vh, t_end)
+    return _moving_load(*args, jnp.asarray(rtol, args[0].dtype), max_steps=int(max_steps))
 
 
-@functools.partial(jax.jit, static_argnames=("rtol", "max_steps"))
-def _moving_load(phi, vh, t_end, *, rtol, max_steps):
-    def solve(phi, vh, t_end):
+@functools.partial(jax.jit, static_argnames=("max_steps",))
+def _moving_load(phi, vh, t_end, rtol, *, max_steps):
+    def solve(phi, vh, t_end, rtol):
         one = jnp.ones_like(phi)
         p, first, _, _ = _solve(
             one, phi, one, vh, 0.0 * one, rtol=rtol, max_steps=max_steps, history=True, t_end=t_end
@@ -1012,7 +1014,7 @@ def _moving_load(phi, vh, t_end, *, rtol, max_steps):
             history=_history(samples, recording.count, p, x, displacement),
         )
 
-    solve = forward_jacobian_jvp(solve)
+    solve = forward_jacobian_jvp(solve, n_differentiable=3)
     for _ in range(phi.ndim):
-        solve = jax.vmap(solve)
-    return solve(phi, vh, t_end)
+        solve = jax.vmap(solve, in_axes=(0, 0, 0, None))
+    return solve(phi, vh, t_end, rtol)
