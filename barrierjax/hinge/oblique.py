@@ -954,7 +954,7 @@ def oblique_impact(
     vh = _checks.non_negative("tangential_speed", tangential_speed)
     friction = _checks.non_negative("friction", friction)
     args = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
-    options = dict(max_steps=int(max_steps), history=bool(history), n_x=_N_X)
+    options = {"max_steps": int(max_steps), "history": bool(history), "n_x": _N_X}
     rtol = jnp.asarray(rtol, args[0].dtype)
     if args[0].ndim == 0:
         return _oblique_chunked(*args, rtol, **options)
