@@ -6,7 +6,6 @@ interpolant so that the switching time carries an exact gradient (a boolean even
 give a zero one).
 """
 
-import math
 
 import diffrax
 import equinox as eqx
@@ -57,7 +56,7 @@ def solve_phase(
     if switch is not None:
         # The switch is located on the dense interpolant, itself accurate to about rtol;
         # asking for much less than rounding would exhaust the root finder.
-        root_tol = max(1e-2 * rtol, 1e-13)
+        root_tol = jnp.maximum(1e-2 * rtol, 1e-13)
         event = diffrax.Event(
             lambda t, y, args, **kwargs: switch(t, y, args),
             root_finder=optx.Newton(rtol=root_tol, atol=root_tol),
@@ -97,7 +96,7 @@ def solve_phase(
     )
 
 
-def sigma_end(rtol: float) -> float:
+def sigma_end(rtol):
     """Where a decelerative phase integrated in sigma = ln(V*/V) hands over to the
     analytic run-out to rest: e^-sigma_end is below rtol by e^-3."""
-    return math.log(1.0 / rtol) + 3.0
+    return 3.0 - jnp.log(rtol)

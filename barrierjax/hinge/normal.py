@@ -700,25 +700,27 @@ def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
 
 
-@functools.partial(
-    jax.jit, static_argnames=("rtol", "n_history", "string_cells", "string_courant")
-)
-def _normal_impact_axial(mu, phi, speed, eta0, *, rtol, n_history, string_cells, string_courant):
+@functools.partial(jax.jit, static_argnames=("n_history", "string_cells", "string_courant"))
+def _normal_impact_axial(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string_courant):
     """With axial force (report 3.4, `axial.py` and `string.py`): the beam stage by time
     integration, then the plastic string where N reaches N0; in the speed-free variables
-    the speed enters through eta0 V^2."""
+    the speed enters through eta0 V^2. `rtol` is traced: a new tolerance does not
+    recompile."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)
-    stages = forward_jacobian_jvp(
-        functools.partial(
-            axial_impact,
+
+    def stages(mu, phi, eta, rtol):
+        return axial_impact(
+            mu,
+            phi,
+            eta,
             rtol=rtol,
             n_history=n_history,
             string_cells=string_cells,
             string_courant=string_courant,
         )
-    )
-    r = stages(mu, safe_phi, eta0 * speed**2)
+
+    r = forward_jacobian_jvp(stages, n_differentiable=3)(mu, safe_phi, eta0 * speed**2, rtol)
     history = _scaled_history(r["history"], mu, speed) if n_history else None
     t_final = eqx.error_if(
         r["t_final"] * speed,
@@ -811,14 +813,13 @@ def normal_impact(
         args = jnp.broadcast_arrays(mu, phi, speed, eta0)
         solve = functools.partial(
             _normal_impact_axial,
-            rtol=float(rtol),
             n_history=int(n_history),
             string_cells=int(string_cells),
             string_courant=float(string_courant),
         )
         for _ in range(args[0].ndim):
-            solve = jax.vmap(solve)
-        return solve(*args)
+            solve = jax.vmap(solve, in_axes=(0, 0, 0, 0, None))
+        return solve(*args, jnp.asarray(rtol, args[0].dtype))
     mu, phi, speed = jnp.broadcast_arrays(mu, phi, speed)
     options = dict(
         method=method,
