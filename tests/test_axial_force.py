@@ -76,6 +76,24 @@ def test_axial_force_stiffens_the_barrier():
     np.testing.assert_allclose(r.damage, r.damage[0], rtol=1e-2)
 
 
+def test_beam_that_locks_while_the_vehicle_crushes():
+    # phi near 1 and a strong axial force: V0' turns negative before N reaches N0 and
+    # before the velocities meet, so the beam stops (the backing never pushes it back)
+    # and the vehicle crushes to rest against it. The beam, driven by the constant crush
+    # force alone, moves the same whatever the vehicle's mass and speed; the vehicle stops
+    # at T = mu V / phi.
+    phi, eta0 = 1.12764131948091, 16.449052816866732
+    mu = jnp.array([1.4531843284914956, 3.0, 1.4531843284914956])
+    v = jnp.array([0.8251699965190115, 0.8251699965190115, 1.3])
+    r = _axial(mu, phi, v, eta0)
+    assert np.all(np.isinf(r.t_string))
+    np.testing.assert_allclose(r.w_final, r.w_final[0], rtol=1e-9)
+    np.testing.assert_allclose(r.t_final, mu * v / phi, rtol=1e-12)
+    assert np.all(np.asarray(r.t_star) < np.asarray(r.t_final))
+    work = r.crush_work + r.backing_work + r.hinge_work
+    np.testing.assert_allclose(work, 0.5 * mu * v**2, rtol=1e-9)
+
+
 def test_history_energy_at_every_saved_time():
     """The vehicle's lost kinetic energy equals crush, backing and hinge work (bending and
     stretching) and the beam's kinetic energy at every sample; N/N0 = 2 eta0 W0 (3.4.33);

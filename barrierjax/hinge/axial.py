@@ -23,7 +23,11 @@ non-decreasing throughout (its rate is K/S - S/2 - phi >= 0 once n > 0), as (3.4
 requires.
 
 Accelerative phase: P = P0 (phi constant), from V0 = 0, W0 = 0, S = S* (3.4.37), until the
-vehicle's velocity 1 - phi T/mu meets V0 (3.4.38). At T = 0, V0 S' = 0 = V0, and S' is
+vehicle's velocity 1 - phi T/mu meets V0 (3.4.38), or until the beam stops first: as K
+grows with n, V0' can turn negative before either the velocities meet or n reaches 1
+(phi near 1, strong axial force). The report does not meet this case. The backing does
+not push the beam back, so the beam locks where it stopped, and the vehicle crushes to
+rest against it at phi, at T = mu/phi (speed-free); `t_final` is that time. At T = 0, V0 S' = 0 = V0, and S' is
 0/0; its limit is 0 (K/S - S/2 - phi is O(n^2) = O(T^4) there), which is the value used at
 V0 = 0 exactly. S moves by O(T^4) at first; near T = 0 the rate of S relaxes as 1/V0,
 which the explicit Tsit5 handles in fewer steps than the L-stable Kvaerno5 (2-30 times
@@ -141,35 +145,50 @@ def _beam_phases(p: _Params, *, rtol, solver, dense):
     """The two phases of the beam stage, each ending where N reaches N0 if it does."""
     options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol, "dense": dense}
     zero = jnp.zeros_like(p.mu)
-    # The velocities meet by T = mu/phi at the latest, where the vehicle's has fallen to
-    # zero and the beam's is not negative (the axial force slows the beam, so the phase
-    # outlasts its 3.2 length 1/((phi - S*)/S* + phi/mu)).
     first = solve_phase(
         _accelerating_field,
         _Accelerating(zero + 1.0, zero, zero, zero, zero, zero, zero, zero),
         zero,
         p.mu / p.phi,
         p,
-        switch=lambda t, y, p: jnp.minimum(
-            y.vehicle_velocity - y.beam_velocity, 1.0 - _axial(y.displacement, p)[0]
-        ),
+        switch=lambda t, y, p: jnp.min(jnp.stack(_crushing_ends(t, y, p))),
         max_steps=4096,
         **options,
     )
     a = first.y_end
-    string_in_first = _axial(a.displacement, p)[0] >= 1.0 - 1e-9
+    velocities_met, string_reached, beam_stopped = _crushing_ends(first.t_end, a, p)
+    string_in_first = string_reached <= jnp.minimum(velocities_met, beam_stopped)
+    locked = beam_stopped < jnp.minimum(velocities_met, string_reached)
     second = solve_phase(
         _decelerating_field,
         _decelerating_start(first, p),
         zero,
-        jnp.where(string_in_first, zero, _sigma_end(rtol)),
+        jnp.where(string_in_first | locked, zero, _sigma_end(rtol)),
         (p, a.beam_velocity),
         switch=lambda sigma, y, args: 1.0 - _axial(y.displacement, args[0])[0],
         switch_required=False,
         max_steps=16384,
         **options,
     )
-    return first, second, string_in_first
+    return first, second, string_in_first, locked
+
+
+def _crushing_ends(t, y: _Accelerating, p: _Params):
+    """The three ways the crushing phase ends, each a function that falls through zero
+    there: the velocities meet (3.4.36); N reaches N0 (the string); or the beam stops
+    while the vehicle still crushes. The last happens where the axial force has grown
+    enough that the crush force no longer drives the mechanism (V0' < 0): the beam then
+    locks (the backing does not push it back) and the vehicle crushes to rest against
+    it. Its function is V0/T, positive at T = 0, where V0 grows at (phi - S*)/S*.
+    The velocities meet by T = mu/phi at the latest (the vehicle's has fallen to zero),
+    the phase's bound."""
+    at_start = (p.phi - p.s_star) / p.s_star
+    beam_moving = jnp.where(t > 0.0, y.beam_velocity / jnp.where(t > 0.0, t, 1.0), at_start)
+    return (
+        y.vehicle_velocity - y.beam_velocity,
+        1.0 - _axial(y.displacement, p)[0],
+        beam_moving / at_start,
+    )
 
 
 def _decelerating_start(first, p: _Params) -> _Decelerating:
@@ -363,7 +382,9 @@ def axial_impact(
     solver = diffrax.Tsit5() if solver is None else solver
     root = jnp.sqrt(phi**2 + 3.0)
     p = _Params(mu, phi, eta, 3.0 / (root + phi))
-    first, second, string_in_first = _beam_phases(p, rtol=rtol, solver=solver, dense=bool(n_history))
+    first, second, string_in_first, locked = _beam_phases(
+        p, rtol=rtol, solver=solver, dense=bool(n_history)
+    )
     reached, start = _string_start(
         first, second, string_in_first, p, cells=string_cells, rtol=rtol, solver=solver
     )
@@ -380,8 +401,11 @@ def axial_impact(
     beam_only = _at_rest(second, p, v_star, rtol)
     with_string = _after_string(first, second, string_in_first, string, start)
     final = {key: jnp.where(reached, with_string[key], beam_only[key]) for key in beam_only}
+    # A locked beam: the vehicle crushes on at phi against it, to rest at T = mu/phi.
+    vehicle = first.y_end.vehicle_velocity
+    final["t_final"] = jnp.where(locked, p.mu / p.phi, final["t_final"])
+    crush = first.y_end.crush + jnp.where(locked, 0.5 * p.mu * vehicle**2 / p.phi, 0.0)
     t_string = jnp.where(string_in_first, first.t_end, second.y_end.time)
-    crush = first.y_end.crush
     return dict(
         history=_history(first, second, string_in_first, p, final, string, reached, n_history) if n_history else None,
         s_star=p.s_star,
