@@ -112,6 +112,7 @@ def result_dict(scene, result, name: str = "") -> dict:
         "max_deflection_m": _f(result.max_deflection),
         "duration_s": _f(result.duration),
         "accelerative_phase_s": _f(result.model.t_star * scales.time),
+        "string_start_s": _string_start(result, scales),
         "peak_force_N": _f(result.peak_force),
         "peak_deceleration_m_s2": deceleration,
         "peak_deceleration_g": deceleration / STANDARD_GRAVITY,
@@ -124,6 +125,7 @@ def result_dict(scene, result, name: str = "") -> dict:
         "hinge_work_J": _f(result.hinge_work),
         "friction_work_J": _f(result.friction_work),
         "slope_work_J": _f(result.slope_work),
+        "string_work_J": _f(result.string_work),
         "exit_kinetic_energy_J": _f(0.5 * scene.vehicle.mass * result.exit_speed**2),
         "energy_balance_error_J": _f(
             result.crush_work
@@ -131,10 +133,29 @@ def result_dict(scene, result, name: str = "") -> dict:
             + result.hinge_work
             + result.friction_work
             + result.slope_work
+            + result.string_work
             + 0.5 * scene.vehicle.mass * result.exit_speed**2
             - result.kinetic_energy
         ),
     }
+
+
+def _string_start(result, scales) -> float | None:
+    """When N reached N0 and the beam became a plastic string, or None if it never did."""
+    t_string = getattr(result.model, "t_string", None)
+    if t_string is None or not math.isfinite(float(t_string)):
+        return None
+    return _f(t_string * scales.time)
+
+
+def _phases(data: dict) -> str:
+    crushing = f"{data['accelerative_phase_s'] * 1e3:.1f} ms"
+    string = data["string_start_s"]
+    if string is None:
+        return f"vehicle crushes for the first {crushing}"
+    if string <= data["accelerative_phase_s"]:
+        return f"plastic string from {string * 1e3:.1f} ms, in the crushing phase"
+    return f"crushing phase {crushing}; plastic string from {string * 1e3:.1f} ms"
 
 
 def format_summary(data: dict) -> str:
@@ -176,8 +197,7 @@ def format_summary(data: dict) -> str:
         f"Results: {data['model']}",
         f"  vehicle damage (crush)        {data['damage_m'] * 1e3:10.1f} mm",
         f"  max barrier deflection        {data['max_deflection_m'] * 1e3:10.1f} mm",
-        f"  duration (contact to rest)    {data['duration_s'] * 1e3:10.1f} ms"
-        f"   (vehicle crushes for the first {data['accelerative_phase_s'] * 1e3:.1f} ms)",
+        f"  duration (contact to rest)    {data['duration_s'] * 1e3:10.1f} ms   ({_phases(data)})",
         f"  peak contact force            {data['peak_force_N'] / 1e3:10.1f} kN",
         f"  peak vehicle deceleration     {data['peak_deceleration_g']:10.1f} g"
         f"   ({data['peak_deceleration_m_s2']:.1f} m/s^2)",
@@ -191,6 +211,7 @@ def format_summary(data: dict) -> str:
         f"  beam plastic hinges    {share(data['hinge_work_J'])}",
         f"  friction               {share(data['friction_work_J'])}",
         f"  normal force x slope   {share(data['slope_work_J'])}",
+        f"  plastic string         {share(data['string_work_J'])}",
         f"  kept by the vehicle    {share(data['exit_kinetic_energy_J'])}",
         f"  balance error          {data['energy_balance_error_J']:.2e} J",
     ]

@@ -9,6 +9,7 @@ model of report 3.2.
 from typing import Literal
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.core import Tracer
@@ -69,6 +70,9 @@ class Result(eqx.Module):
     - `friction_work`, `slope_work`: oblique impacts only (zero otherwise): the work of
       friction, and that of the normal force through the barrier's slope under the
       vehicle (see `barrierjax.hinge.oblique`); the vehicle keeps the rest;
+    - `string_work`: with `Barrier.axial_capacity`, the stretching work of the plastic
+      string (report 3.4.45) once N reaches N0 (zero otherwise; the beam stage's
+      stretching is in `hinge_work`);
     - `exit_speed`, `exit_angle_deg`: the vehicle's speed when it leaves the barrier and
       the angle of its velocity to the barrier (positive: away from it); zero for a
       normal impact, where the vehicle comes to rest with the barrier;
@@ -89,6 +93,7 @@ class Result(eqx.Module):
     hinge_work: Batchable
     friction_work: Batchable
     slope_work: Batchable
+    string_work: Batchable
     exit_speed: Batchable
     exit_angle_deg: Batchable
     groups: Dimensionless
@@ -171,6 +176,20 @@ def deflected_shape(x, hinge, displacement, hinge_work):
     return jnp.where(passed, jnp.maximum(shape, 0.0), 0.0)
 
 
+def _with_string_profile(shape, x, profile, model: NormalImpact):
+    """The deflected shape during the plastic-string stage, where the mechanism of (3.2.1)
+    no longer holds: the string's own profile (`NormalImpactHistory.string_profile`, at
+    nodes spread over the final half-span), for the string block of the history and the
+    state at rest after it (its last `n + 1` rows, n = profile rows), where the string
+    was reached."""
+    n = profile.shape[0]
+    nodes = model.s_final * jnp.linspace(0.0, 1.0, profile.shape[1])
+    on_grid = jax.vmap(lambda row: jnp.interp(x, nodes, row, right=0.0))(profile)
+    string_rows = jnp.concatenate([on_grid, on_grid[-1:]])
+    reached = jnp.isfinite(model.t_string)
+    return shape.at[-(n + 1) :].set(jnp.where(reached, string_rows, shape[-(n + 1) :]))
+
+
 def simulate(
     scene: Scene,
     *,
@@ -218,6 +237,8 @@ def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
         # The first sample of the decelerative phase repeats the last of the accelerative
         # one, so S is non-decreasing as the interpolation needs.
         shape = deflected_shape(x, h.hinge, h.displacement, h.hinge_work)
+        if h.string_profile is not None:
+            shape = _with_string_profile(shape, x, h.string_profile, model)
         history = History(
             time=h.time * s.time,
             vehicle_velocity=h.vehicle_velocity * s.velocity,
@@ -246,6 +267,7 @@ def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
         hinge_work=model.hinge_work * s.energy,
         friction_work=zero,
         slope_work=zero,
+        string_work=model.string_work * s.energy,
         exit_speed=zero,
         exit_angle_deg=zero,
         groups=groups,
@@ -302,6 +324,7 @@ def _oblique(scene, groups, rtol, n_history) -> Result:
         hinge_work=model.hinge_work * s.energy,
         friction_work=model.friction_work * s.energy,
         slope_work=model.slope_work * s.energy,
+        string_work=jnp.zeros_like(model.damage),
         exit_speed=jnp.hypot(model.exit_normal_speed, model.exit_tangential_speed) * s.velocity,
         exit_angle_deg=model.exit_angle_deg,
         groups=groups,

@@ -114,6 +114,33 @@ def test_axial_capacity_runs_the_axial_model():
     assert float(total) == pytest.approx(float(result.kinetic_energy), rel=1e-7)
 
 
+def test_axial_scene_that_reaches_the_plastic_string():
+    # The default barrier held against axial motion (N0 = Fy A = 1.5 MN) at 100 km/h: N
+    # reaches N0 after the crushing phase, and the string stretches to rest.
+    from barrierjax.cli import format_summary, result_dict
+
+    barrier = bj.Barrier(105e3, 34.0, 60e3, axial_capacity=1.5e6)
+    scene = eqx.tree_at(lambda s: s.barrier, si_scene(100 / 3.6), barrier)
+    result = bj.simulate(scene, n_history=20)
+    assert np.isfinite(float(result.model.t_string))
+    assert float(result.string_work) > 0.0
+    total = result.crush_work + result.backing_work + result.hinge_work + result.string_work
+    # To the string's discretisation error (128 cells).
+    assert float(total) == pytest.approx(float(result.kinetic_energy), rel=1e-5)
+    data = result_dict(scene, result)
+    assert data["string_start_s"] == pytest.approx(float(result.model.t_string * result.groups.scales.time))
+    assert abs(data["energy_balance_error_J"]) < 1e-5 * data["kinetic_energy_J"]
+    assert "plastic string from" in format_summary(data)
+    # The deflected shape at rest is the string's: its centre is the final deflection, it
+    # falls towards the held ends and vanishes beyond the final half-span.
+    h = result.history
+    final_shape = np.asarray(h.deflected_shape[-1])
+    assert final_shape[0] == pytest.approx(float(result.max_deflection), rel=1e-12)
+    assert np.all(np.diff(final_shape) <= 1e-12)
+    beyond = np.asarray(h.x) > float(result.hinge_extent)
+    assert beyond.any() and np.all(final_shape[beyond] == 0.0)
+
+
 def test_unimplemented_physics_is_refused_not_ignored():
     barrier = bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6)
     axial = bj.Scene(barrier, si_scene().vehicle, bj.Impact(10.0, angle_deg=30.0))
