@@ -39,12 +39,22 @@ Decelerative phase: phi = -mu V0' (3.4.38), which gives (3.4.39):
     V0'   = -(S/2 + K/S) / (S + 2 mu)
     V0 S' = K (S + mu) / (S (S + 2 mu)) - S (S + 3 mu) / (2 (S + 2 mu))
 
-integrated, as in 3.2, in sigma = ln(V*/V0), in which the approach to rest is smooth, to
+(the report's (3.4.38) assumes that the vehicle rides with the beam to the end: the
+contact force -mu V0' is not checked against the crush force phi; see "Not modelled"
+below) integrated, as in 3.2, in sigma = ln(V*/V0), in which the approach to rest is smooth, to
 V0 = V* rtol e^-3; the rest is added with S frozen. At rest S is the positive root of the
 cubic (3.4.40), S^3 + 3 mu S^2 - 3 (1 + n_f^2) S - 3 mu (1 + n_f^2) = 0, n_f = 2 lambda_f.
 
 All of it runs in the speed-free variables of `normal.py` (tau = T/V, v = V0/V, w = W0/V^2
 for the impact speed V): n = 2 eta w with eta = eta0 V^2, so the speed enters through eta.
+
+Not modelled: a second crushing. As n grows, the contact force -mu V0' of the
+decelerative phase grows with K and can exceed the crush force phi (heavy vehicles and
+strong axial force: mu 25, phi 1.414, V 0.288, eta0 4.71, `examples/axial_scene.toml`,
+reaches 1.075 phi just before the string). The vehicle would then crush again at phi
+while the beam decelerates under it; the model keeps it riding with the beam, so the
+history's contact force exceeds phi there. None of 128 random scenarios of
+`benchmarks/axial_force.py` (mu 0.1 to 30) met this.
 
 The beam stage ends where n reaches 1 (eta0 W0 = 1/2, (3.4.43)), at `t_string`: the beam
 is then a plastic string (3.4.45), which `string.py` carries to rest from the initial
