@@ -39,10 +39,9 @@ Decelerative phase: phi = -mu V0' (3.4.38), which gives (3.4.39):
     V0'   = -(S/2 + K/S) / (S + 2 mu)
     V0 S' = K (S + mu) / (S (S + 2 mu)) - S (S + 3 mu) / (2 (S + 2 mu))
 
-(the report's (3.4.38) assumes that the vehicle rides with the beam to the end: the
-contact force -mu V0' is not checked against the crush force phi; see "Not modelled"
-below) integrated, as in 3.2, in sigma = ln(V*/V0), in which the approach to rest is smooth, to
-V0 = V* rtol e^-3; the rest is added with S frozen. At rest S is the positive root of the
+integrated, as in 3.2, in sigma = ln(V*/V0), in which the approach to rest is smooth, to
+V0 = V* rtol e^-3 (the vehicle rides with the beam to the end, as (3.4.38) assumes; see
+"Not modelled" below); the rest is added with S frozen. At rest S is the positive root of the
 cubic (3.4.40), S^3 + 3 mu S^2 - 3 (1 + n_f^2) S - 3 mu (1 + n_f^2) = 0, n_f = 2 lambda_f.
 
 All of it runs in the speed-free variables of `normal.py` (tau = T/V, v = V0/V, w = W0/V^2
