@@ -3,7 +3,7 @@
 
 Run from the repository root:
 
-    python benchmarks/axial_force.py            # full run (a few minutes on 2 cores)
+    python benchmarks/axial_force.py            # full run (about 10 minutes on 2 cores)
     python benchmarks/axial_force.py --quick    # smoke run (tiny sizes)
 
 It prints tables and writes `axial_force.json` and PNG plots to `--out` (default
