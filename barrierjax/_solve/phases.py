@@ -6,7 +6,6 @@ interpolant so that the switching time carries an exact gradient (a boolean even
 give a zero one).
 """
 
-
 import diffrax
 import equinox as eqx
 import jax

@@ -27,12 +27,13 @@ vehicle's velocity 1 - phi T/mu meets V0 (3.4.38), or until the beam stops first
 grows with n, V0' can turn negative before either the velocities meet or n reaches 1
 (phi near 1, strong axial force). The report does not meet this case. The backing does
 not push the beam back, so the beam locks where it stopped, and the vehicle crushes to
-rest against it at phi, at T = mu/phi (speed-free); `t_final` is that time. At T = 0, V0 S' = 0 = V0, and S' is
-0/0; its limit is 0 (K/S - S/2 - phi is O(n^2) = O(T^4) there), which is the value used at
-V0 = 0 exactly. S moves by O(T^4) at first; near T = 0 the rate of S relaxes as 1/V0,
-which the explicit Tsit5 handles in fewer steps than the L-stable Kvaerno5 (2-30 times
-fewer, measured over light to heavy vehicles at rtol 1e-6 and 1e-9), whose error estimate
-is the more cautious there.
+rest against it at phi, at T = mu/phi (speed-free); `t_final` is that time.
+
+At T = 0, V0 S' = 0 = V0, and S' is 0/0; its limit is 0 (K/S - S/2 - phi is O(n^2) =
+O(T^4) there), which is the value used at V0 = 0 exactly. S moves by O(T^4) at first;
+near T = 0 the rate of S relaxes as 1/V0, which the explicit Tsit5 handles in fewer steps
+than the L-stable Kvaerno5 (2-30 times fewer, measured over light to heavy vehicles at
+rtol 1e-6 and 1e-9), whose error estimate is the more cautious there.
 
 Decelerative phase: phi = -mu V0' (3.4.38), which gives (3.4.39):
 
@@ -41,8 +42,8 @@ Decelerative phase: phi = -mu V0' (3.4.38), which gives (3.4.39):
 
 integrated, as in 3.2, in sigma = ln(V*/V0), in which the approach to rest is smooth, to
 V0 = V* rtol e^-3 (the vehicle rides with the beam to the end, as (3.4.38) assumes; see
-"Not modelled" below); the rest is added with S frozen. At rest S is the positive root of the
-cubic (3.4.40), S^3 + 3 mu S^2 - 3 (1 + n_f^2) S - 3 mu (1 + n_f^2) = 0, n_f = 2 lambda_f.
+"Not modelled" below); the rest is added with S frozen. At rest S is the positive root of
+the cubic (3.4.40), S^3 + 3 mu S^2 - 3 (1 + n_f^2) S - 3 mu (1 + n_f^2) = 0, n_f = 2 lambda_f.
 
 All of it runs in the speed-free variables of `normal.py` (tau = T/V, v = V0/V, w = W0/V^2
 for the impact speed V): n = 2 eta w with eta = eta0 V^2, so the speed enters through eta.
