@@ -1,0 +1,1 @@
+"""Constitutive laws of dynamic plasticity (report chapter 2)."""
