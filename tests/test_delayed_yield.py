@@ -31,6 +31,12 @@ def linear(t, rate):
     return rate * t
 
 
+def ramp(t, args):
+    """A stress rising linearly to its peak at t = rise, then held: args = (peak, rise)."""
+    peak, rise = args
+    return peak * jnp.minimum(t / rise, 1.0)
+
+
 def params(grains=2030.0, **changes):
     return {"sigma0": SIGMA0, "A": A, "d": grain_diameter(grains), "beta": BETA} | changes
 
@@ -122,10 +128,7 @@ def test_ramp_then_hold_against_quad_and_brentq(peak_factor):
     times = jnp.array([0.0, rise, 10.0 * reference])
     sampled = delay_time(times, jnp.array([0.0, peak, peak]), **p)
 
-    def stress(t, args):
-        return args * jnp.minimum(t / rise, 1.0)
-
-    of_fn = delay_time_of(stress, 10.0 * reference, peak, **p)
+    of_fn = delay_time_of(ramp, 10.0 * reference, (peak, rise), **p)
     np.testing.assert_allclose(sampled, reference, rtol=1e-12)
     np.testing.assert_allclose(of_fn, reference, rtol=1e-9)
 
@@ -165,7 +168,7 @@ def test_no_yield_gives_inf():
     low = 0.2 * float(upper_yield_stress(1.0, E=E, **p))
     times = jnp.linspace(0.0, 1.0, 5)
     assert delay_time(times, jnp.full(5, low), **p) == jnp.inf
-    assert delay_time_of(lambda t, s: s, 1.0, low, **p) == jnp.inf
+    assert delay_time_of(linear, 1.0, low, **p) == jnp.inf
 
 
 def test_vmap_equals_loop():
@@ -193,11 +196,8 @@ def test_gradients_against_finite_differences():
     def sampled(peak, beta):
         return delay_time(times, jnp.array([0.0, peak, peak]), **(p | {"beta": beta}))
 
-    def ramp(t, s):
-        return s * jnp.minimum(t / rise, 1.0)
-
     def of_fn(peak):
-        return delay_time_of(ramp, 1.0, peak, **p)
+        return delay_time_of(ramp, 1.0, (peak, rise), **p)
 
     g_peak, g_beta = jax.grad(sampled, argnums=(0, 1))(peak, BETA)
     np.testing.assert_allclose(
