@@ -73,37 +73,58 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from . import plotting
+from .hinge.elastic import (
+    delayed_yield_limit_speed,
+    elastic_impact,
+    elastic_limit_speed,
+    string_impact,
+)
 from .hinge.normal import normal_impact
 from .hinge.oblique import moving_load, oblique_impact
 from .hinge.static_collapse import static_load_deflection
+from .materials.delayed_yield import grain_diameter, upper_yield_stress
+from .materials.hereditary import HereditaryLaw
+from .materials.overstress import (
+    CowperSymonds,
+    GilmanJohnston,
+    LinearOverstress,
+    LogOverstress,
+    SinhOverstress,
+    StrainDependentOverstress,
+)
+from .materials.plasticity import RateIndependentPlasticity
+from .materials.response import uniaxial_response
 
 __all__ = ["FIGURES", "FigureEntry", "damage_bound", "figure", "filename", "write_figures"]
 
 
 class FigureEntry(NamedTuple):
     """A figure of the report: its `caption` and the function that draws it; `printed` is
-    False where the scan lost the caption and it was composed from the report's text."""
+    False where the scan lost the caption and it was composed from the report's text, and
+    `added` True where the report has no figure: the key is then the section it shows."""
 
     caption: str
     make: Callable[[], Figure]
     printed: bool = True
+    added: bool = False
 
 
 FIGURES: dict[str, FigureEntry] = {}
 
 
-def figure(number: str, caption: str, *, printed: bool = True):
-    """Register the decorated function as the report's figure `number`."""
+def figure(number: str, caption: str, *, printed: bool = True, added: bool = False):
+    """Register the decorated function as the report's figure `number` (with `added`, a
+    figure of section `number` that the report does not have)."""
 
     def register(make):
-        FIGURES[number] = FigureEntry(caption, make, printed)
+        FIGURES[number] = FigureEntry(caption, make, printed and not added, added)
         return make
 
     return register
 
 
 def filename(number: str) -> str:
-    """"3.2.2" -> "fig_3_2_2.png"."""
+    """ "3.2.2" -> "fig_3_2_2.png"."""
     return "fig_" + number.replace(".", "_") + ".png"
 
 
@@ -124,11 +145,238 @@ def write_figures(
 def _title(fig: Figure, number: str, subtitle: str = "") -> None:
     entry = FIGURES[number]
     lines = [f"Figure {number}  {entry.caption}"]
-    if not entry.printed:
+    if entry.added:
+        lines.append("(not a figure of the report: added to show its section " + number + ")")
+    elif not entry.printed:
         lines.append("(caption lost from the scan; composed from the report's text)")
     if subtitle:
         lines.append(subtitle)
     fig.suptitle("\n".join(lines), fontsize=12)
+
+
+# --------------------------------------------------------------------------------------
+# Chapter 2, constitutive laws, and sections 3.1 and 3.5, elastic impact: the report has
+# no figures here; these show what its text describes. Mild steel in the report's units
+# (psi, s): E = 30e6 psi and a static (lower) yield stress of 30,000 psi (the report gives
+# none).
+
+STEEL_E = 30e6  # psi
+STEEL_G = 11.5e6  # psi
+STEEL_YIELD = 30_000.0  # psi, static lower yield stress (assumed)
+STRAIN_RATES_2_2 = (1e-3, 1e-1, 1e1, 1e2)  # 1/s: the report's range for structures
+DELAY_2_3 = {"A": 1.2e-6, "beta": 9.0, "grains": (2030.0, 346.0)}  # mm^3 s, -, per mm^2
+LOG_LAW_2_3 = {"sigma_c": 26_000.0, "tau": 0.1}  # as printed after (2.2.8)
+
+
+def _rate_laws():
+    """Each rate law of 2.2 with mild-steel parameters that raise the flow stress by about
+    half at 100/s, where the report gives none: (name, law)."""
+    E, sigma0 = STEEL_E, STEEL_YIELD
+    return [
+        ("linear (2.2.2), tau = 5 us", LinearOverstress(E, sigma0, 5e-6)),
+        (
+            "strain-dependent (2.2.5), tau = 5 us, eps0 = -0.01",
+            StrainDependentOverstress(E, sigma0, 5e-6, -0.01),
+        ),
+        (
+            "logarithmic (2.2.6), sigma_c = 2.6 ksi, tau = 0.1 s",
+            LogOverstress(E, sigma0, 2600.0, 0.1),
+        ),
+        ("sinh, sigma_c = 2.6 ksi, tau = 0.1 s", SinhOverstress(E, sigma0, 2600.0, 0.1)),
+        ("Cowper-Symonds (4.3.1), D = 40/s, q = 5", CowperSymonds(E, sigma0, 40.0, 5.0)),
+        (
+            "Gilman-Johnston, rate0 = 1e8/s, D = 760 ksi",
+            GilmanJohnston(E, 1e8, 760_000.0),
+        ),
+        (
+            "hereditary (2.2.15), psi: 0.5 e^(-t/1 us) + 0.5 e^(-t/10 us)",
+            HereditaryLaw(E, sigma0, jnp.array([0.5, 0.5]), jnp.array([1e-6, 1e-5])),
+        ),
+        (
+            "rate-independent, kinematic hardening H = E/100",
+            RateIndependentPlasticity(E, sigma0, kinematic=E / 100),
+        ),
+    ]
+
+
+def _constant_rate(law, rate, strain=0.02, n=200):
+    """Stress against strain at a constant strain rate, loaded to `strain`."""
+    strains = np.linspace(0.0, strain, n)
+    return strains, np.asarray(uniaxial_response(law, strains / rate, strains).stress)
+
+
+@figure("2.2", "Stress-Strain Curves of the Rate Laws at Several Strain Rates", added=True)
+def _figure_2_2() -> Figure:
+    laws = _rate_laws()
+    fig = Figure(figsize=(11, 12), layout="constrained")
+    axes = fig.subplots(4, 2, sharex=True).ravel()
+    for ax, (name, law) in zip(axes, laws):
+        for k, rate in enumerate(STRAIN_RATES_2_2):
+            strain, stress = _constant_rate(law, rate)
+            ax.plot(100 * strain, stress / 1e3, color=f"C{k}", label=f"{rate:g}/s")
+        ax.axhline(STEEL_YIELD / 1e3, color="0.5", ls="--", lw=0.9)
+        ax.set_title(name, fontsize=9)
+        ax.set_ylabel("stress, ksi")
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=8, title="strain rate")
+    for ax in axes[-2:]:
+        ax.set_xlabel("strain, %")
+    _title(
+        fig,
+        "2.2",
+        f"E = {STEEL_E / 1e6:g}e6 psi, static yield {STEEL_YIELD / 1e3:g} ksi (dashed); "
+        "backward-Euler updates (`uniaxial_response`)",
+    )
+    return fig
+
+
+def _lower_yield(sigma_c, tau, rates):
+    """The logarithmic law's flow stress at 2 % strain at each constant rate (2.2.8)."""
+    law = LogOverstress(STEEL_E, STEEL_YIELD, sigma_c, tau)
+    return np.array([_constant_rate(law, rate)[1][-1] for rate in rates])
+
+
+@figure("2.3", "Upper and Lower Yield Points of Mild Steel against Strain Rate", added=True)
+def _figure_2_3() -> Figure:
+    rates = np.logspace(-3, 3, 7)
+    fig = Figure(figsize=(10, 7), layout="constrained")
+    ax = fig.subplots()
+    sigma0 = 2.0 * STEEL_G / 45.0
+    for k, grains in enumerate(DELAY_2_3["grains"]):
+        upper = upper_yield_stress(
+            rates,
+            E=STEEL_E,
+            sigma0=sigma0,
+            A=DELAY_2_3["A"],
+            d=grain_diameter(grains),
+            beta=DELAY_2_3["beta"],
+        )
+        ax.loglog(
+            rates,
+            np.asarray(upper) / 1e3,
+            color=f"C{k}",
+            label=f"upper (2.3.5), {grains:g} grains/mm$^2$",
+        )
+        printed = 77_000.0 if grains == 2030.0 else 60_000.0
+        ax.loglog(
+            rates,
+            printed * rates**0.1 / 1e3,
+            color=f"C{k}",
+            ls="--",
+            label=f"as printed: {printed:,.0f} $\\alpha^{{1/10}}$ psi",
+        )
+    for k, (sigma_c, tau, note) in enumerate(
+        ((LOG_LAW_2_3["sigma_c"], LOG_LAW_2_3["tau"], "as printed"), (2600.0, 0.1, "sigma_c / 10"))
+    ):
+        lower = _lower_yield(sigma_c, tau, rates)
+        ax.loglog(
+            rates,
+            lower / 1e3,
+            color=f"C{k + 2}",
+            marker="o",
+            ms=3,
+            label=f"lower, log law: $\\sigma_c$ = {sigma_c:,.0f} psi, $\\tau$ = {tau:g} s ({note})",
+        )
+    ax.set_xlabel("strain rate $\\alpha$, 1/s")
+    ax.set_ylabel("yield stress, ksi")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    _title(
+        fig,
+        "2.3",
+        "upper (2.3.5): sigma0 = 2G/45, A = 1.2e-6 mm$^3$ s, beta = 9, d = (grains/mm$^2$)$^{-1/2}$"
+        " mm,\nabout 10 x the printed coefficients; lower: the log law's flow stress at 2 % strain"
+        " over a static 30 ksi,\nwhich with the printed sigma_c and tau rises faster than the"
+        " upper, against the text",
+    )
+    return fig
+
+
+# A rectangular steel bar 1 in wide and 4 in deep, in lb, in, s.
+BAR_3_1 = {"E": STEEL_E, "b": 1.0, "h": 4.0, "rho": 7.33e-4}  # rho in lb s^2/in^4
+
+
+def _bar_section():
+    b, h = BAR_3_1["b"], BAR_3_1["h"]
+    return {"E": BAR_3_1["E"], "I": b * h**3 / 12.0, "A": b * h, "rho": BAR_3_1["rho"]}
+
+
+@figure(
+    "3.1", "Mass Striking an Infinite Elastic Beam: Motion and Moment under the Mass", added=True
+)
+def _figure_3_1() -> Figure:
+    section = _bar_section()
+    fig = Figure(figsize=(11, 7.5), layout="constrained")
+    (ax_v, ax_a), (ax_w, ax_m) = fig.subplots(2, 2)
+    masses = (1.0, 10.0, 100.0)  # lb s^2/in
+    t = np.logspace(-6, -1, 300)
+    for k, mass in enumerate(masses):
+        r = elastic_impact(mass, 1.0, t, **section)
+        s = string_impact(mass, 1.0, t, tension=1e5, rho=section["rho"] * section["A"])
+        label = f"M = {mass:g} lb s$^2$/in"
+        ax_v.semilogx(t * 1e3, np.asarray(r.velocity), color=f"C{k}", label=label)
+        ax_v.semilogx(t * 1e3, np.asarray(s.velocity), color=f"C{k}", ls=":")
+        ax_a.loglog(t * 1e3, -np.asarray(r.acceleration), color=f"C{k}")
+        ax_a.loglog(t * 1e3, -np.asarray(s.acceleration), color=f"C{k}", ls=":")
+        ax_w.loglog(t * 1e3, np.asarray(r.displacement), color=f"C{k}")
+        ax_m.semilogx(t * 1e3, np.asarray(r.moment) / 1e3, color=f"C{k}")
+    ax_v.set_ylabel("velocity under the mass / $V_0$")
+    ax_a.set_ylabel("deceleration / $V_0$, 1/s")
+    ax_w.set_ylabel("displacement / $V_0$, s")
+    ax_m.set_ylabel("moment under the mass / $V_0$, kip s")
+    ax_v.legend(fontsize=8, title="solid: beam (3.1.3); dotted: string (3.1.5), T = 100 kip")
+    for ax in (ax_v, ax_a, ax_w, ax_m):
+        ax.set_xlabel("time after impact, ms")
+        ax.grid(True, which="both", alpha=0.3)
+    _title(
+        fig,
+        "3.1",
+        "steel bar 1 x 4 in, E = 30e6 psi; the beam's deceleration is infinite at impact, the"
+        " string's finite;\nthe moment starts at 2 EI K$^2$ V$_0$ whatever the mass",
+    )
+    return fig
+
+
+@figure("3.5", "Limiting Speed of an Elastic Impact with Delayed Yield against Mass", added=True)
+def _figure_3_5() -> Figure:
+    section = _bar_section()
+    y = BAR_3_1["h"] / 2.0
+    masses = np.logspace(-3, 3, 61)  # lb s^2/in
+    fig = Figure(figsize=(10.5, 6), layout="constrained")
+    ax = fig.subplots()
+    elastic = elastic_limit_speed(**section, y=y, yield_stress=STEEL_YIELD)
+    # sigma0 as printed (2G/45), and the values that reproduce 2.3's printed coefficients
+    # (`barrierjax.materials.delayed_yield`), 10 times lower.
+    implied = {2030.0: 39_280.0, 346.0: 39_980.0}
+    for k, grains in enumerate(DELAY_2_3["grains"]):
+        for sigma0, style, note in (
+            (2.0 * STEEL_G / 45.0, ":", "2G/45"),
+            (implied[grains], "-", ""),
+        ):
+            delayed = delayed_yield_limit_speed(
+                masses,
+                **section,
+                y=y,
+                sigma0=sigma0,
+                delay_constant=DELAY_2_3["A"],
+                d=grain_diameter(grains),
+                beta=DELAY_2_3["beta"],
+            )
+            label = f"{grains:g} grains/mm$^2$, $\\sigma_0$ = {sigma0 / 1e3:.1f} ksi {note}"
+            ax.loglog(masses, np.asarray(delayed / elastic), color=f"C{k}", ls=style, label=label)
+    ax.axhline(1.0, color="0.5", ls="--", lw=0.9)
+    ax.set_xlabel("striking mass M, lb s$^2$/in")
+    ax.set_ylabel("limiting speed with delayed yield / without (30 ksi)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=9)
+    _title(
+        fig,
+        "3.5",
+        "steel bar 1 x 4 in, elastic limit at 30 ksi; delay constants of 2.3 (A = 1.2e-6 mm$^3$"
+        " s, beta = 9)\nwith sigma0 as printed (dotted) and as implied by the printed"
+        " coefficients of 2.3 (solid); the gain falls as M$^{-2/9}$",
+    )
+    return fig
 
 
 # --------------------------------------------------------------------------------------
@@ -168,13 +416,21 @@ def _figure_3_2_2() -> Figure:
     s_star = float(result.s_star[0])
     ax_s.axhline(s_star, color="0.5", linestyle="--", lw=0.8)
     ax_s.annotate(
-        rf"$S^*$ = {s_star:.3f} (accelerative phase)", xy=(0.012, s_star), xytext=(0, 4),
-        textcoords="offset points", fontsize=8, color="0.3",
+        rf"$S^*$ = {s_star:.3f} (accelerative phase)",
+        xy=(0.012, s_star),
+        xytext=(0, 4),
+        textcoords="offset points",
+        fontsize=8,
+        color="0.3",
     )
     ax_s.axhline(1.0, color="0.5", linestyle="-.", lw=0.8)
     ax_s.annotate(
-        r"final $S = \alpha \to 1$ as $\mu \to \infty$", xy=(0.012, 1.0), xytext=(0, 4),
-        textcoords="offset points", fontsize=8, color="0.3",
+        r"final $S = \alpha \to 1$ as $\mu \to \infty$",
+        xy=(0.012, 1.0),
+        xytext=(0, 4),
+        textcoords="offset points",
+        fontsize=8,
+        color="0.3",
     )
     ax_s.set_ylabel("hinge distance $S$")
     ax_s.set_ylim(0.0, 1.6)
@@ -183,7 +439,11 @@ def _figure_3_2_2() -> Figure:
     ax_v.set_ylim(0.0, 1.02)
     ax_v.annotate(
         "dotted: vehicle velocity\nduring the accelerative phase",
-        xy=(0.02, 0.55), xycoords="axes fraction", fontsize=8, color="0.3", va="top",
+        xy=(0.02, 0.55),
+        xycoords="axes fraction",
+        fontsize=8,
+        color="0.3",
+        va="top",
     )
     ax_w.set_ylabel("displacement $W/V_0^2$")
     ax_w.set_yscale("log")
@@ -246,7 +506,11 @@ def _figure_3_2_4() -> Figure:
         ax.loglog(np.asarray(mus), np.asarray(damage[k]), color=color, label=rf"$\phi$ = {phi:g}")
         ax.axhline(float(bounds[k]), color=color, linestyle="--", lw=0.9)
     ax.plot(
-        [], [], color="0.4", linestyle="--", lw=0.9,
+        [],
+        [],
+        color="0.4",
+        linestyle="--",
+        lw=0.9,
         label=r"$\mu \to \infty$: $S^*/(2(\phi - S^*))$",
     )
     ax.set_xlim(1e-2, 1e3)
@@ -257,7 +521,11 @@ def _figure_3_2_4() -> Figure:
     ax.annotate(
         r"$D/V_0^2 = T^*/(2V_0) = \mu S^* / (2[\phi S^* + \mu(\phi - S^*)])$,  "
         r"$S^* = (\phi^2 + 3)^{1/2} - \phi$",
-        xy=(0.98, 0.02), xycoords="axes fraction", ha="right", va="bottom", fontsize=8,
+        xy=(0.98, 0.02),
+        xycoords="axes fraction",
+        ha="right",
+        va="bottom",
+        fontsize=8,
         color="0.3",
     )
     _title(fig, "3.2.4")
@@ -314,8 +582,12 @@ def _oblique_examples():
     vh = np.append(SPEED_3_3_4 * np.cos(angles), TANGENTIAL_SPEED_3_3_5)
     ones = jnp.ones(vn.shape)
     result = oblique_impact(
-        MASS_RATIO_3_3 * ones, FORCE_RATIO_3_3 * ones, jnp.asarray(vn), jnp.asarray(vh),
-        history=True, max_steps=_MAX_STEPS_3_3,
+        MASS_RATIO_3_3 * ones,
+        FORCE_RATIO_3_3 * ones,
+        jnp.asarray(vn),
+        jnp.asarray(vh),
+        history=True,
+        max_steps=_MAX_STEPS_3_3,
     )
     along, normal = jax.vmap(vehicle_path)(result.history)
     fields = {
@@ -355,7 +627,10 @@ def _draw_oblique(axes, result, h, color, label):
 def _finish_oblique(fig, axes, s_final):
     ax_s, ax_v, ax_p = axes
     ax_s.axhline(
-        s_final, color="0.5", linestyle="-.", lw=0.8,
+        s_final,
+        color="0.5",
+        linestyle="-.",
+        lw=0.8,
         label=rf"final $S_1 = S_2$ if $R$ = 0 at rest: {s_final:.3f}",
     )
     ax_s.plot([], [], color="0.3", label="$S_1$ (ahead of the vehicle)")
@@ -396,8 +671,13 @@ def _figure_3_3_3() -> Figure:
     for value, color, name in ((s1_inf, "C0", "S_1"), (s2_inf, "C1", "S_2")):
         ax_s.axhline(value, color=color, linestyle="--", lw=0.9)
         ax_s.annotate(
-            rf"steady ${name}$ = {value:.3f}", xy=(T_END_3_3_3, value), xytext=(-4, 4),
-            textcoords="offset points", ha="right", fontsize=8, color="0.3",
+            rf"steady ${name}$ = {value:.3f}",
+            xy=(T_END_3_3_3, value),
+            xytext=(-4, 4),
+            textcoords="offset points",
+            ha="right",
+            fontsize=8,
+            color="0.3",
         )
     ax_s.set_ylabel("hinge distance $S$")
     ax_s.set_ylim(0.0, 4.2)
@@ -405,11 +685,19 @@ def _figure_3_3_3() -> Figure:
     ax_v.plot(t, h["v0"], color="C2", label="$V_0$: barrier under the load")
     ax_v.axhline(v0_inf, color="C2", linestyle="--", lw=0.9)
     ax_v.annotate(
-        rf"steady $V_0 = (\phi^2 - 1)^{{1/2}}/V_H$ = {v0_inf:.3f}", xy=(T_END_3_3_3, v0_inf),
-        xytext=(-4, -12), textcoords="offset points", ha="right", fontsize=8, color="0.3",
+        rf"steady $V_0 = (\phi^2 - 1)^{{1/2}}/V_H$ = {v0_inf:.3f}",
+        xy=(T_END_3_3_3, v0_inf),
+        xytext=(-4, -12),
+        textcoords="offset points",
+        ha="right",
+        fontsize=8,
+        color="0.3",
     )
     ax_v.plot(
-        t, h["v0"] + h["slope"] * vh, color="C3", linestyle=":",
+        t,
+        h["v0"] + h["slope"] * vh,
+        color="C3",
+        linestyle=":",
         label=r"$V_0 + \theta V_H$: the load point's normal velocity",
     )
     ax_v.axhline(0.0, color="0.5", lw=0.8)
@@ -420,7 +708,8 @@ def _figure_3_3_3() -> Figure:
     for ax in (ax_s, ax_v):
         ax.grid(True, alpha=0.3)
     _title(
-        fig, "3.3.3",
+        fig,
+        "3.3.3",
         rf"$\phi$ = {phi:g}, $V_H$ = {vh:g}: a vehicle at $V_N$ = 1 would keep crushing "
         rf"to T = {T_END_3_3_3:g} if $\mu$ > {phi * T_END_3_3_3:g}",
     )
@@ -443,7 +732,8 @@ def _figure_3_3_4() -> Figure:
     _finish_oblique(fig, axes, final_hinge(MASS_RATIO_3_3))
     axes[2].legend(fontsize=9, loc="upper right", title="vehicle at angle, exit angle")
     _title(
-        fig, "3.3.4",
+        fig,
+        "3.3.4",
         rf"$\mu$ = {MASS_RATIO_3_3:g}, $\phi$ = {FORCE_RATIO_3_3:g}, vehicle speed "
         rf"$V_V$ = {SPEED_3_3_4:g} at angle $\alpha$ to the barrier",
     )
@@ -460,7 +750,10 @@ def _figure_3_3_5() -> Figure:
     fig = Figure(figsize=(8.5, 10), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
     _draw_oblique(
-        axes, result, h, "C0",
+        axes,
+        result,
+        h,
+        "C0",
         rf"the vehicle leaves at {result['exit_angle_deg']:.1f}$\degree$ "
         rf"($V_N$ = {result['exit_normal_speed']:.3f}, $V_H$ = "
         rf"{result['exit_tangential_speed']:.2f})",
@@ -468,7 +761,8 @@ def _figure_3_3_5() -> Figure:
     _finish_oblique(fig, axes, final_hinge(MASS_RATIO_3_3))
     axes[2].legend(fontsize=9, loc="upper right")
     _title(
-        fig, "3.3.5",
+        fig,
+        "3.3.5",
         rf"$\mu$ = {MASS_RATIO_3_3:g}, $\phi$ = {FORCE_RATIO_3_3:g}, "
         rf"$V_H$ = {TANGENTIAL_SPEED_3_3_5:g}, $V_N$ = {NORMAL_SPEED_3_3_5:g} "
         rf"($V_V$ = {np.hypot(TANGENTIAL_SPEED_3_3_5, NORMAL_SPEED_3_3_5):.2f} at "
@@ -487,10 +781,17 @@ def _figure_3_3_6() -> Figure:
     fig = Figure(figsize=(10, 4.6), layout="constrained")
     ax = fig.subplots()
     plotting.draw_plan(
-        ax, h["x"], h["displacement"][marks], [f"barrier at T = {t[k]:.2f}" for k in marks],
-        path, (h["contact_position"], h["contact_displacement"]), marks, leave,
+        ax,
+        h["x"],
+        h["displacement"][marks],
+        [f"barrier at T = {t[k]:.2f}" for k in marks],
+        path,
+        (h["contact_position"], h["contact_displacement"]),
+        marks,
+        leave,
         (TANGENTIAL_SPEED_3_3_5, NORMAL_SPEED_3_3_5),
-        (result["exit_tangential_speed"], result["exit_normal_speed"]), 0.3 * t[leave],
+        (result["exit_tangential_speed"], result["exit_normal_speed"]),
+        0.3 * t[leave],
     )
     ax.set_title(
         rf"impact: $V_H$ = {TANGENTIAL_SPEED_3_3_5:g}, $V_N$ = {NORMAL_SPEED_3_3_5:g}; "
@@ -500,7 +801,8 @@ def _figure_3_3_6() -> Figure:
         rf"$V_N$ = {result['exit_normal_speed']:.3f}, $V_H$ = "
         rf"{result['exit_tangential_speed']:.3f}, {result['exit_angle_deg']:.1f}$\degree$ "
         "away from the barrier",
-        loc="left", fontsize=9,
+        loc="left",
+        fontsize=9,
     )
     ax.set_aspect("equal")
     ax.set_xlabel("position along the barrier $X$ (from the impact point)")
@@ -508,7 +810,8 @@ def _figure_3_3_6() -> Figure:
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     _title(
-        fig, "3.3.6",
+        fig,
+        "3.3.6",
         rf"$\mu$ = {MASS_RATIO_3_3:g}, $\phi$ = {FORCE_RATIO_3_3:g}: the impact of figure "
         "3.3.5, drawn to scale",
     )
@@ -694,14 +997,20 @@ def _figure_3_4_9() -> Figure:
     ax_n.set_ylabel("axial force $N/N_0 = 2\\eta_0 W_0$")
     ax_n.axhline(1.0, color="0.5", ls=":", lw=0.9)
     ax_n.annotate(
-        "plastic string", xy=(0.01, 1.0), xytext=(0, -12), textcoords="offset points",
-        fontsize=8, color="0.3", xycoords=("axes fraction", "data"),
+        "plastic string",
+        xy=(0.01, 1.0),
+        xytext=(0, -12),
+        textcoords="offset points",
+        fontsize=8,
+        color="0.3",
+        xycoords=("axes fraction", "data"),
     )
     ax_n.set_xlabel("time $T$")
     for ax in (ax_s, ax_v, ax_w, ax_n):
         ax.grid(True, alpha=0.3)
     _title(
-        fig, "3.4.9",
+        fig,
+        "3.4.9",
         rf"$\mu$ = {EXAMPLE_3_4_9['mass_ratio']:g}, $\phi$ = {EXAMPLE_3_4_9['force_ratio']:g}, "
         f"speed {EXAMPLE_3_4_9['speed']:g}\nthe report quotes -2.5 % ($\\eta_0$ = 2) and "
         "-12.5 % ($\\eta_0$ = 5) from its coarse scheme (benchmarks/axial_force.py)",
