@@ -59,7 +59,7 @@ class HereditaryLaw(eqx.Module):
         self.weights = check(
             "weights",
             weights,
-            lambda w: jnp.all(w >= 0) & (jnp.abs(jnp.sum(w) - 1) <= 1e-6),
+            lambda w: (w >= 0) & (abs(w.sum() - 1) <= 1e-6),
             "non-negative, summing to 1",
         )
         self.relaxation_times = positive("relaxation_times", relaxation_times)

@@ -54,7 +54,10 @@ def _by_steps(law, times, strains, step, substeps, initial):
         def substep(carry, _):
             return step(*carry, d_strain / substeps, dt / substeps), None
 
-        carry = jax.lax.scan(substep, carry, None, length=substeps)[0]
+        if substeps == 1:
+            carry = step(*carry, d_strain, dt)
+        else:
+            carry = jax.lax.scan(substep, carry, None, length=substeps)[0]
         return carry, carry[0]
 
     _, stress = jax.lax.scan(interval, (stress0, state0), (jnp.diff(times), jnp.diff(strains)))
@@ -127,7 +130,7 @@ def uniaxial_response(
         raise ValueError(
             f"strains must have the shape of times {np.shape(times)}; got {np.shape(strains)}"
         )
-    times = check("times", times, lambda t: jnp.all(jnp.diff(t) > 0), "strictly increasing")
+    times = check("times", times, lambda t: t[1:] > t[:-1], "strictly increasing")
     strains = jnp.asarray(strains, dtype=times.dtype)
     zero = jnp.zeros_like(times[0])
     initial = law.update(zero, law.init_state(), strains[0], zero)
