@@ -84,7 +84,7 @@ def _by_diffrax(law, times, strains, initial, rtol, atol, max_steps, adjoint):
         diffrax.Kvaerno5(),
         times[0],
         times[-1],
-        None,
+        (times[1] - times[0]) / 16,
         initial[1],
         saveat=diffrax.SaveAt(ts=times),
         stepsize_controller=controller,
@@ -115,7 +115,8 @@ def uniaxial_response(
       exponential update), `substeps` equal steps per sample interval;
     - "report": the report's scheme (4.2.8)-(4.2.10), with `iterations` of (4.2.11);
     - "explicit": forward Euler (to show where it fails);
-    - "diffrax": Kvaerno5 with a PID controller (`rtol`, `atol` on the plastic strain), steps
+    - "diffrax": Kvaerno5 with a PID controller (`rtol`, `atol` on the plastic strain; first
+      step 1/16 of the first interval), steps
       clipped at the samples; `adjoint` defaults to diffrax's RecursiveCheckpointAdjoint (use
       `diffrax.ForwardMode()` under `jax.jacfwd`).
     "report", "explicit" and "diffrax" need an overstress law.
