@@ -119,3 +119,15 @@ def test_axial_force_benchmark_quick(tmp_path):
     assert gaps == sorted(gaps, reverse=True)
     assert data["error_vs_time"]["rows"][-1]["error"] < 1e-4  # rtol 1e-6
     assert (out / "axial_force.png").stat().st_size > 0
+
+
+def test_materials_benchmark_quick(tmp_path):
+    data = run_quick("materials", tmp_path / "results", timeout=300)
+    assert {"meta", "error_vs_time", "throughput", "summary"} <= set(data)
+    methods = {row["method"] for row in data["error_vs_time"]}
+    assert methods == {"implicit", "report", "explicit", "diffrax", "scipy Radau"}
+    # The closed-form references make every stable error small at the finest setting; the
+    # NumPy baseline computes the same update (a check of the benchmark's plumbing).
+    finest = [r for r in data["error_vs_time"] if r["method"] == "implicit" and r["steps"] == 64]
+    assert finest and all(r["stable"] and r["error"] < 0.05 for r in finest)
+    assert all(row["max_stress_difference"] < 1e-8 for row in data["throughput"])
