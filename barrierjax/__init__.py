@@ -1,11 +1,11 @@
 """barrierjax: differentiable impact-dynamics models for highway barriers, in JAX.
 
 Describe a `Scene` (a `Barrier`, a `Vehicle`, an `Impact`) in any consistent units and
-call `simulate(scene)`; the report's models live in `barrierjax.hinge`, the sizing
-problem in `barrierjax.design`.
+call `simulate(scene)`; the report's models live in `barrierjax.hinge` (chapter 3) and
+`barrierjax.materials` (chapter 2), the sizing problem in `barrierjax.design`.
 """
 
-from . import hinge
+from . import hinge, materials
 from .scene import (
     Barrier,
     Dimensionless,
@@ -30,5 +30,6 @@ __all__ = [
     "broadcast_scene",
     "dimensionless",
     "hinge",
+    "materials",
     "simulate",
 ]

@@ -1,18 +1,38 @@
 """Rigid-plastic hinge mechanisms of a vehicle striking a beam on a backing (report ch. 3)."""
 
+from .elastic import (
+    ElasticImpact,
+    StringImpact,
+    delay_integral,
+    delayed_yield_limit_speed,
+    elastic_impact,
+    elastic_limit_speed,
+    impact_rate,
+    string_impact,
+    timoshenko_initial_deceleration,
+)
 from .normal import NormalImpact, NormalImpactHistory, normal_impact
 from .oblique import MovingLoad, ObliqueImpact, ObliqueImpactHistory, moving_load, oblique_impact
 from .static_collapse import StaticLoadDeflection, static_load_deflection
 
 __all__ = [
+    "ElasticImpact",
     "MovingLoad",
     "NormalImpact",
     "NormalImpactHistory",
     "ObliqueImpact",
     "ObliqueImpactHistory",
     "StaticLoadDeflection",
+    "StringImpact",
+    "delay_integral",
+    "delayed_yield_limit_speed",
+    "elastic_impact",
+    "elastic_limit_speed",
+    "impact_rate",
     "moving_load",
     "normal_impact",
     "oblique_impact",
     "static_load_deflection",
+    "string_impact",
+    "timoshenko_initial_deceleration",
 ]
