@@ -129,5 +129,5 @@ def test_materials_benchmark_quick(tmp_path):
     # The closed-form references make every stable error small at the finest setting; the
     # NumPy baseline computes the same update (a check of the benchmark's plumbing).
     finest = [r for r in data["error_vs_time"] if r["method"] == "implicit" and r["steps"] == 64]
-    assert finest and all(r["stable"] and r["error"] < 0.05 for r in finest)
+    assert finest and all(r["stable"] and r["error"] < 0.1 for r in finest)
     assert all(row["max_stress_difference"] < 1e-8 for row in data["throughput"])
