@@ -39,7 +39,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import argument_parser, meta, save, source_fingerprint, sources_changed
+from _common import argument_parser, drain, meta, save, source_fingerprint, sources_changed
 
 from barrierjax.materials.overstress import (
     CowperSymonds,
@@ -189,6 +189,19 @@ def radau(name, tau, times, strains, rtol):
     return E * (strains - sol.y[0]) if sol.success else np.full_like(times, np.nan)
 
 
+def run_method(law, name, tau, method, times, strains, rtol, cfg):
+    """(stress history, best seconds, first-call seconds) of one method on one history."""
+    if method == "scipy Radau":
+        t0 = time.perf_counter()
+        stress = radau(name, tau, times, strains, rtol)
+        return stress, time.perf_counter() - t0, time.perf_counter() - t0
+    stress, best, first = timed(
+        lambda: _response(law, jnp.asarray(times), jnp.asarray(strains), method, rtol or 1e-8),
+        cfg["repeats"],
+    )
+    return np.asarray(stress), best, first
+
+
 def section_error_vs_time(cfg):
     print(
         "\n(a) Error against run time: ramp to 1 % at rate alpha, hold as long; error = max |dsigma| / sigma0"
@@ -208,45 +221,32 @@ def section_error_vs_time(cfg):
                 runs += [("scipy Radau", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"][:2]]
                 for method, n, rtol in runs:
                     times, strains = history(rate, n)
-                    if method == "scipy Radau":
-                        t0 = time.perf_counter()
-                        stress = radau(name, tau, times, strains, rtol)
-                        best, first = time.perf_counter() - t0, 0.0
-                    else:
-                        stress, best, first = timed(
-                            lambda law=law, times=times, strains=strains, method=method, rtol=rtol: (
-                                _response(
-                                    law,
-                                    jnp.asarray(times),
-                                    jnp.asarray(strains),
-                                    method,
-                                    rtol or 1e-8,
-                                )
-                            ),
-                            cfg["repeats"],
+                    row = {"law": name, "method": method, "steps": n, "rtol": rtol}
+                    row.update(rate=rate, tau=tau, error=None, stable=False, failure=None)
+                    row.update(time_s=None, compile_s=None, reference_check=None)
+                    try:
+                        if n not in references:
+                            references[n] = reference(name, rate, tau, times)
+                        ref, row["reference_check"] = references[n]
+                        stress, best, first = run_method(
+                            law, name, tau, method, times, strains, rtol, cfg
                         )
-                        stress = np.asarray(stress)
-                    if n not in references:
-                        references[n] = reference(name, rate, tau, times)
-                    ref, ref_check = references[n]
+                    except Exception as exc:  # noqa: BLE001 - a failure is a result
+                        drain()
+                        row["failure"] = str(exc).strip().splitlines()[0][:120]
+                        rows.append(row)
+                        print(
+                            f"{name:<17}{method:<12}{rtol or n!s:>9}{rate:>8.0e}{tau:>8.0e}  FAILED: {row['failure']}",
+                            flush=True,
+                        )
+                        continue
                     err = float(np.max(np.abs(stress - ref)) / SIGMA0)
-                    stable = bool(np.all(np.isfinite(stress))) and err < 1.0
-                    row = {
-                        "law": name,
-                        "method": method,
-                        "steps": n,
-                        "rtol": rtol,
-                        "rate": rate,
-                        "tau": tau,
-                        "error": err if np.isfinite(err) else None,
-                        "stable": stable,
-                        "time_s": best,
-                        "compile_s": max(first - best, 0.0),
-                        "reference_check": ref_check,
-                    }
+                    row.update(time_s=best, compile_s=max(first - best, 0.0))
+                    row["stable"] = bool(np.all(np.isfinite(stress))) and err < 1.0
+                    row["error"] = err if np.isfinite(err) else None
                     rows.append(row)
                     knob = f"{rtol:.0e}" if rtol else f"{n}"
-                    shown = f"{err:10.2e}" if stable else f"{'unstable':>10}"
+                    shown = f"{err:10.2e}" if row["stable"] else f"{'unstable':>10}"
                     print(
                         f"{name:<17}{method:<12}{knob:>9}{rate:>8.0e}{tau:>8.0e}{shown}{best:>10.2e}{row['compile_s']:>10.1f}",
                         flush=True,
@@ -337,7 +337,7 @@ def plot(out: Path, rows) -> Path:
         for k, method in enumerate(markers):
             mine = [r for r in rows if r["law"] == name and r["method"] == method]
             ok = [r for r in mine if r["stable"] and r["error"]]
-            bad = [r for r in mine if not r["stable"]]
+            bad = [r for r in mine if not r["stable"] and r["time_s"]]
             ax.loglog(
                 [r["time_s"] for r in ok],
                 [max(r["error"], 1e-16) for r in ok],
@@ -373,9 +373,11 @@ def summarise(rows) -> dict:
         key = f"{r['law']} / {r['method']}"
         entry = out.setdefault(key, {"histories": 0, "unstable": 0, "unstable_cases": []})
         entry["histories"] += 1
-        if not r["stable"]:
+        if not r["stable"]:  # unstable, or failed (a diffrax step budget spent)
             entry["unstable"] += 1
-            entry["unstable_cases"].append({k: r[k] for k in ("steps", "rtol", "rate", "tau")})
+            entry["unstable_cases"].append(
+                {k: r[k] for k in ("steps", "rtol", "rate", "tau", "failure")}
+            )
     return out
 
 
@@ -394,7 +396,9 @@ def main(argv=None):
     print("\nSUMMARY")
     for key, entry in summary.items():
         cases = ", ".join(
-            f"alpha {c['rate']:g} tau {c['tau']:g} n {c['steps']}"
+            f"alpha {c['rate']:g} tau {c['tau']:g} "
+            + (f"rtol {c['rtol']:g}" if c["rtol"] else f"n {c['steps']}")
+            + (" (failed)" if c["failure"] else "")
             for c in entry["unstable_cases"][:4]
         )
         print(f"  {key:<32} unstable {entry['unstable']:>3} of {entry['histories']:<4} {cases}")
