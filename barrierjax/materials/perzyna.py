@@ -164,33 +164,26 @@ class Perzyna(AbstractViscoplastic):
         return self.overstress(x)
 
 
-def _implicit_root(phi, trial, k, ratio, iterations=100):
+def _implicit_root(phi, trial, k, ratio, iterations=64):
     def residual(q, trial, k, ratio):
         return q * (1.0 + ratio * phi((q**2 - k**2) / k**2)) - trial
 
     slope = jax.grad(residual)
     fixed = jax.lax.stop_gradient((trial, k, ratio))
-    tolerance = 4.0 * jnp.finfo(trial.dtype).eps * fixed[0]
 
-    def step(carry):
-        q, low, high, count = carry
+    # A fixed count (not a tolerance) keeps the cost uniform across a vmapped batch; a Newton
+    # step leaving the bracket [low, high] is replaced by bisection, 64 of which exhaust float64.
+    def step(_, carry):
+        q, low, high = carry
         value = residual(q, *fixed)
         low = jnp.where(value < 0.0, q, low)
         high = jnp.where(value > 0.0, q, high)
         newton = q - value / slope(q, *fixed)
-        inside = (newton > low) & (newton < high)
-        return jnp.where(inside, newton, 0.5 * (low + high)), low, high, count + 1
+        inside = (newton >= low) & (newton <= high)
+        q = jnp.where(value == 0.0, q, jnp.where(inside, newton, 0.5 * (low + high)))
+        return q, low, high
 
-    def unfinished(carry):
-        q, low, high, count = carry
-        return (
-            (jnp.abs(residual(q, *fixed)) > tolerance)
-            & (high - low > tolerance)
-            & (count < iterations)
-        )
-
-    start = (fixed[0], fixed[1], fixed[0], 0)
-    q = jax.lax.while_loop(unfinished, step, start)[0]
+    q = jax.lax.fori_loop(0, iterations, step, (fixed[0], fixed[1], fixed[0]))[0]
     # One Newton step with gradients: its value is the root, its derivatives those of the
     # implicit function theorem, -(d residual/d p)/(d residual/d q).
     return q - residual(q, trial, k, ratio) / slope(q, trial, k, ratio)
