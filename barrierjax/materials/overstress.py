@@ -76,6 +76,11 @@ class OverstressLaw(eqx.Module):
         """g >= 0, E times the plastic strain rate, for overstress >= 0 (0 at 0)."""
         raise NotImplementedError
 
+    def flow_inverse(self, rate, static_stress, strain):
+        """The overstress x with g(x) = rate (rate >= 0), where it has a closed form: it
+        starts the backward-Euler iteration (`update`). Default: no estimate (inf)."""
+        return jnp.full_like(rate, jnp.inf)
+
     def static_stress(self, kappa):
         return self.sigma0.yield_stress(kappa)
 
@@ -168,9 +173,20 @@ class OverstressLaw(eqx.Module):
                 (newton >= low) & (newton <= high) & (jnp.abs(2 * r) <= jnp.abs(last_step * dr))
             )
             new = jnp.where(use_newton, newton, (low + high) / 2)
+            # Converged to rounding: stay. Otherwise a residual of rounding noise fails the
+            # step test and bisects towards a stale end of the bracket, far from the root.
+            new = jnp.where(jnp.abs(r) <= tolerance, x, new)
             return new, low, high, new - x
 
-        start = (frozen[1], jnp.zeros_like(x_trial), frozen[1], 2 * frozen[1])
+        # Start at x0 = min(x_trial, g^-1(x_trial / dt)): the residual is >= 0 there (either
+        # dt g(x0) >= x_trial - x0 or x0 = x_trial), and near the root when the step is stiff,
+        # where Newton from x_trial would shrink x by only a factor (1 - 1/q) per step.
+        law, x_bound, _, k_frozen, strain_frozen, dt_frozen = frozen
+        stiff = dt_frozen > 0
+        absorbed = jnp.where(stiff, x_bound / jnp.where(stiff, dt_frozen, 1.0), jnp.inf)
+        x0 = jnp.minimum(x_bound, law.flow_inverse(absorbed, k_frozen, strain_frozen))
+        tolerance = 16 * jnp.finfo(x_bound.dtype).eps * (x_bound + k_frozen)
+        start = (x0, jnp.zeros_like(x_trial), x0, 2 * x_bound)
         x = jax.lax.fori_loop(0, self.iterations, safeguarded_newton, start)[0]
         r, dr = value_and_slope(self, x, x_trial, state.kappa, k, strain, dt)
         x = x - r / dr
@@ -200,6 +216,9 @@ class LinearOverstress(OverstressLaw):
     def flow(self, overstress, static_stress, strain):
         return overstress / self.tau
 
+    def flow_inverse(self, rate, static_stress, strain):
+        return self.tau * rate
+
 
 class StrainDependentOverstress(OverstressLaw):
     """(2.2.5): g = mu(eps) x / tau with mu(eps) = eps0 / (eps0 - |eps|), eps0 < 0.
@@ -225,6 +244,9 @@ class StrainDependentOverstress(OverstressLaw):
         mu = self.eps0 / (self.eps0 - jnp.abs(strain))
         return mu * overstress / self.tau
 
+    def flow_inverse(self, rate, static_stress, strain):
+        return self.tau * rate * (self.eps0 - jnp.abs(strain)) / self.eps0
+
 
 class LogOverstress(OverstressLaw):
     """(2.2.6): g = sigma_c/tau (exp(x/sigma_c) - 1): an overstress logarithmic in the rate.
@@ -241,13 +263,16 @@ class LogOverstress(OverstressLaw):
     sigma_c: jnp.ndarray
     tau: jnp.ndarray
 
-    def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=40):
+    def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=12):
         self._init_common(E, sigma0, elastic_unloading, iterations)
         self.sigma_c = positive("sigma_c", sigma_c)
         self.tau = positive("tau", tau)
 
     def flow(self, overstress, static_stress, strain):
         return self.sigma_c / self.tau * jnp.expm1(overstress / self.sigma_c)
+
+    def flow_inverse(self, rate, static_stress, strain):
+        return self.sigma_c * jnp.log1p(self.tau * rate / self.sigma_c)
 
 
 class SinhOverstress(OverstressLaw):
@@ -257,13 +282,16 @@ class SinhOverstress(OverstressLaw):
     sigma_c: jnp.ndarray
     tau: jnp.ndarray
 
-    def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=40):
+    def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=12):
         self._init_common(E, sigma0, elastic_unloading, iterations)
         self.sigma_c = positive("sigma_c", sigma_c)
         self.tau = positive("tau", tau)
 
     def flow(self, overstress, static_stress, strain):
         return self.sigma_c / self.tau * jnp.sinh(overstress / self.sigma_c)
+
+    def flow_inverse(self, rate, static_stress, strain):
+        return self.sigma_c * jnp.arcsinh(self.tau * rate / self.sigma_c)
 
 
 class CowperSymonds(OverstressLaw):
@@ -275,7 +303,7 @@ class CowperSymonds(OverstressLaw):
     D: jnp.ndarray
     q: jnp.ndarray
 
-    def __init__(self, E, sigma0, D, q, *, elastic_unloading=False, iterations=40):
+    def __init__(self, E, sigma0, D, q, *, elastic_unloading=False, iterations=12):
         self._init_common(E, sigma0, elastic_unloading, iterations)
         self.D = positive("D", D)
         self.q = positive("q", q)
@@ -283,6 +311,9 @@ class CowperSymonds(OverstressLaw):
     def flow(self, overstress, static_stress, strain):
         ratio = _positive_part(overstress) / static_stress
         return jnp.where(overstress > 0, self.E * self.D * ratio**self.q, 0 * ratio)
+
+    def flow_inverse(self, rate, static_stress, strain):
+        return static_stress * (rate / (self.E * self.D)) ** (1 / self.q)
 
 
 class QuadraticOverstress(OverstressLaw):
@@ -292,7 +323,7 @@ class QuadraticOverstress(OverstressLaw):
 
     tau: jnp.ndarray
 
-    def __init__(self, E, sigma0, tau, *, elastic_unloading=False, iterations=40):
+    def __init__(self, E, sigma0, tau, *, elastic_unloading=False, iterations=12):
         self._init_common(E, sigma0, elastic_unloading, iterations)
         self.tau = positive("tau", tau)
 
@@ -314,7 +345,7 @@ class GilmanJohnston(OverstressLaw):
     rate0: jnp.ndarray
     D: jnp.ndarray
 
-    def __init__(self, E, rate0, D, *, elastic_unloading=False, iterations=40):
+    def __init__(self, E, rate0, D, *, elastic_unloading=False, iterations=12):
         self._init_common(E, None, elastic_unloading, iterations)
         self.rate0 = positive("rate0", rate0)
         self.D = positive("D", D)
