@@ -43,9 +43,12 @@ from _common import argument_parser, drain, meta, save, source_fingerprint, sour
 
 from barrierjax.materials.overstress import (
     CowperSymonds,
+    GilmanJohnston,
     LinearOverstress,
     LogOverstress,
     OverstressState,
+    SinhOverstress,
+    StrainDependentOverstress,
 )
 from barrierjax.materials.response import uniaxial_response, update_with_tangent
 
@@ -58,6 +61,7 @@ SIGMA_C = 20e6  # Pa, the logarithmic law's characteristic stress
 def config(quick: bool) -> dict:
     if quick:
         return {
+            "laws": LAWS[:3],
             "rates": [1.0],
             "taus": [1e-3],
             "steps": [16, 64],
@@ -67,6 +71,7 @@ def config(quick: bool) -> dict:
             "repeats": 1,
         }
     return {
+        "laws": LAWS,
         "rates": [1e-3, 1.0, 1e4],
         "taus": [1.0, 1e-3, 1e-7],
         "steps": [16, 64, 256, 1024, 4096],
@@ -81,11 +86,32 @@ def config(quick: bool) -> dict:
 # The laws and their references.
 
 
+LAWS = (
+    "LinearOverstress",
+    "LogOverstress",
+    "CowperSymonds",
+    "SinhOverstress",
+    "StrainDependentOverstress",
+    "GilmanJohnston",
+)
+CLOSED_FORMS = ("LinearOverstress", "LogOverstress")
+RADAU = ("LinearOverstress", "LogOverstress", "CowperSymonds")  # `numpy_flow` has these
+
+
 def make_law(name, tau):
+    """Each law with the relaxation time `tau` (for Cowper-Symonds D = 1/tau; for
+    Gilman-Johnston rate0 = 1/tau with a drag stress that puts its flow stress at sigma0
+    for a plastic strain rate of 1e-3/tau)."""
     if name == "LinearOverstress":
         return LinearOverstress(E, SIGMA0, tau)
     if name == "LogOverstress":
         return LogOverstress(E, SIGMA0, SIGMA_C, tau)
+    if name == "SinhOverstress":
+        return SinhOverstress(E, SIGMA0, SIGMA_C, tau)
+    if name == "StrainDependentOverstress":
+        return StrainDependentOverstress(E, SIGMA0, tau, -0.01)
+    if name == "GilmanJohnston":
+        return GilmanJohnston(E, 1.0 / tau, SIGMA0 * math.log(1e3))
     return CowperSymonds(E, SIGMA0, 1.0 / tau, 5.0)
 
 
@@ -121,7 +147,7 @@ def closed_form(name, rate, tau, times):
 def reference(name, rate, tau, times):
     """(exact stress at `times`, its own error estimate): the closed form, or for
     Cowper-Symonds diffrax at rtol 1e-12 checked against rtol 1e-11."""
-    if name != "CowperSymonds":
+    if name in CLOSED_FORMS:
         return closed_form(name, rate, tau, times), 0.0
     strains = np.minimum(times * rate, STRAIN)
     law = make_law(name, tau)
@@ -209,7 +235,7 @@ def section_error_vs_time(cfg):
     header = f"{'law':<17}{'method':<12}{'n / rtol':>9}{'alpha':>8}{'tau':>8}{'error':>10}{'time s':>10}{'compile s':>10}"
     print(header)
     rows = []
-    for name in ("LinearOverstress", "LogOverstress", "CowperSymonds"):
+    for name in cfg["laws"]:
         for rate in cfg["rates"]:
             for tau in cfg["taus"]:
                 law = make_law(name, tau)
@@ -218,7 +244,10 @@ def section_error_vs_time(cfg):
                     (m, n, None) for m in ("implicit", "report", "explicit") for n in cfg["steps"]
                 ]
                 runs += [("diffrax", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"]]
-                runs += [("scipy Radau", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"][:2]]
+                if name in RADAU:
+                    runs += [
+                        ("scipy Radau", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"][:2]
+                    ]
                 for method, n, rtol in runs:
                     times, strains = history(rate, n)
                     row = {"law": name, "method": method, "steps": n, "rtol": rtol}
@@ -233,7 +262,9 @@ def section_error_vs_time(cfg):
                         )
                     except Exception as exc:  # noqa: BLE001 - a failure is a result
                         drain()
-                        row["failure"] = str(exc).strip().splitlines()[0][:120]
+                        lines = str(exc).strip().splitlines()
+                        reason = [x for x in lines if "maximum number" in x or "Error:" in x]
+                        row["failure"] = (reason or lines)[0].strip()[:120]
                         rows.append(row)
                         print(
                             f"{name:<17}{method:<12}{rtol or n!s:>9}{rate:>8.0e}{tau:>8.0e}  FAILED: {row['failure']}",
@@ -367,7 +398,8 @@ def plot(out: Path, rows) -> Path:
 
 
 def summarise(rows) -> dict:
-    """Per law and method: how many histories were stable, and the worst error at the finest setting."""
+    """Per law and method: how many histories were unstable or failed, and the worst error
+    over rates and relaxation times at the finest setting (most steps, or tightest rtol)."""
     out = {}
     for r in rows:
         key = f"{r['law']} / {r['method']}"
@@ -378,6 +410,16 @@ def summarise(rows) -> dict:
             entry["unstable_cases"].append(
                 {k: r[k] for k in ("steps", "rtol", "rate", "tau", "failure")}
             )
+    for key, entry in out.items():
+        mine = [r for r in rows if f"{r['law']} / {r['method']}" == key]
+        finest = max(mine, key=lambda r: (-(r["rtol"] or 0.0), r["steps"]))
+        at_finest = [
+            r for r in mine if (r["rtol"], r["steps"]) == (finest["rtol"], finest["steps"])
+        ]
+        errors = [r["error"] if r["stable"] else math.inf for r in at_finest]
+        entry["finest"] = {"steps": finest["steps"], "rtol": finest["rtol"]}
+        entry["finest_worst_error"] = max(errors)
+        entry["finest_mean_time_s"] = float(np.mean([r["time_s"] or np.nan for r in at_finest]))
     return out
 
 
@@ -399,9 +441,15 @@ def main(argv=None):
             f"alpha {c['rate']:g} tau {c['tau']:g} "
             + (f"rtol {c['rtol']:g}" if c["rtol"] else f"n {c['steps']}")
             + (" (failed)" if c["failure"] else "")
-            for c in entry["unstable_cases"][:4]
+            for c in entry["unstable_cases"][:3]
         )
-        print(f"  {key:<32} unstable {entry['unstable']:>3} of {entry['histories']:<4} {cases}")
+        finest = entry["finest"]
+        setting = f"rtol {finest['rtol']:g}" if finest["rtol"] else f"n {finest['steps']}"
+        print(
+            f"  {key:<40} worst error at {setting:<10} {entry['finest_worst_error']:9.2e}"
+            f" ({entry['finest_mean_time_s']:.1e} s); unstable or failed"
+            f" {entry['unstable']:>3} of {entry['histories']:<3} {cases}"
+        )
     big = rows_b[-1]
     print(
         f"  throughput: {big['points']:.0e} points in {big['jax_s']:.3e} s ({big['jax_s'] / big['points'] * 1e9:.1f} ns/point), NumPy {big['numpy_s'] / big['jax_s']:.1f} x slower"
