@@ -134,6 +134,42 @@ RELAXING = {
 }
 
 
+ENERGY_LAWS = {
+    **RELAXING,
+    "gilman-johnston": GilmanJohnston(E, 1e3, SIGMA0 * 7.0),
+    "rate-independent": RateIndependentPlasticity(E, SIGMA0, isotropic=2e3, kinematic=1e3),
+}
+
+
+@pytest.mark.parametrize("name", list(ENERGY_LAWS))
+def test_energy_balance_and_dissipation(name):
+    """Energy over a cycle with holds (load, relax, reverse, relax): the work put in,
+    sum sigma_(n+1) d_eps, equals the stored elastic energy sigma^2 / 2E plus the plastic
+    work sum sigma_(n+1) d_eps_p plus backward Euler's own loss sum d_sigma^2 / 2E to
+    rounding (an identity of the discrete update, so a test that the returned stress and
+    plastic strain belong together), the plastic work of every step is non-negative (the
+    second law; with kinematic hardening part of it is stored in the back stress), and the
+    numerical loss vanishes at first order in the step."""
+    law = ENERGY_LAWS[name]
+    knots_t = jnp.array([0.0, 1.0, 2.0, 4.0, 5.0]) * 2 * TAU
+    knots_e = jnp.array([0.0, 4.0, 4.0, -4.0, -4.0]) * SIGMA0 / E
+    losses = []
+    for n in (200, 400):
+        times = jnp.linspace(0.0, knots_t[-1], n + 1)
+        strains = jnp.interp(times, knots_t, knots_e)
+        result = response(law, times, strains)
+        stress, plastic = result.stress, result.plastic_strain
+        work = jnp.sum(stress[1:] * jnp.diff(strains))
+        plastic_work = stress[1:] * jnp.diff(plastic)
+        loss = jnp.sum(jnp.diff(stress) ** 2) / (2 * E)
+        stored = stress[-1] ** 2 / (2 * E)
+        scale = SIGMA0 * float(jnp.max(jnp.abs(knots_e)))
+        assert abs(float(work - stored - jnp.sum(plastic_work) - loss)) < 1e-12 * scale
+        assert float(jnp.min(plastic_work)) >= -1e-12 * scale
+        losses.append(float(loss))
+    assert losses[1] / losses[0] == pytest.approx(0.5, abs=0.05)
+
+
 @pytest.mark.parametrize("name", list(RELAXING))
 def test_relaxation_ends_on_static_curve(name):
     """Load at 100/s to 1 %, then hold: the stress decays onto k(kappa), never below it.
