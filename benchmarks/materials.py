@@ -309,25 +309,31 @@ def section_error_vs_time(cfg):
 
 
 def numpy_cowper_symonds(stress, plastic_strain, d_strain, dt, D, q, iterations):
-    """The backward-Euler Cowper-Symonds update in vectorised NumPy: the overstress x solves
-    x - x_trial + dt E D (x/sigma0)^q = 0 on [0, x_trial], by Newton safeguarded with bisection
-    (the library's algorithm, the same iteration count)."""
+    """The backward-Euler Cowper-Symonds update in vectorised NumPy, the library's algorithm
+    with the same iteration count: the overstress x solves x - x_trial + dt E D (x/sigma0)^q
+    = 0, by Newton from x0 = min(x_trial, sigma0 (x_trial / (dt E D))^(1/q)), safeguarded by
+    bisection, held once converged to rounding."""
     trial = stress + E * d_strain
     x_trial = np.abs(trial) - SIGMA0
     flowing = x_trial > 0
-    lo, hi = np.zeros_like(trial), np.maximum(x_trial, 0.0)
-    x = 0.5 * hi
+    x_trial = np.maximum(x_trial, 0.0)
+    c = dt * E * D
+    x = np.minimum(x_trial, SIGMA0 * (x_trial / c) ** (1 / q))
+    lo, hi, last = np.zeros_like(x), x.copy(), 2 * x_trial
+    tolerance = 16 * np.finfo(float).eps * (x_trial + SIGMA0)
     for _ in range(iterations):
-        ratio = x / SIGMA0
-        f = x - x_trial + dt * E * D * ratio**q
-        slope = 1.0 + dt * E * D * q * ratio ** (q - 1) / SIGMA0
-        lo, hi = np.where(f < 0, x, lo), np.where(f < 0, hi, x)
-        newton = x - f / slope
-        x = np.where((newton > lo) & (newton < hi), newton, 0.5 * (lo + hi))
+        r = x - x_trial + c * (x / SIGMA0) ** q
+        slope = 1.0 + c * q * (x / SIGMA0) ** (q - 1) / SIGMA0
+        lo, hi = np.where(r <= 0, x, lo), np.where(r >= 0, x, hi)
+        newton = x - r / slope
+        use = (newton >= lo) & (newton <= hi) & (np.abs(2 * r) <= np.abs(last * slope))
+        new = np.where(use, newton, 0.5 * (lo + hi))
+        new = np.where(np.abs(r) <= tolerance, x, new)
+        x, last = new, new - x
     sign = np.sign(trial)
     new_stress = np.where(flowing, sign * (SIGMA0 + x), trial)
     new_plastic = plastic_strain + np.where(flowing, sign * (x_trial - x) / E, 0.0)
-    tangent = np.where(flowing, E / (1.0 + dt * E * D * q * (x / SIGMA0) ** (q - 1) / SIGMA0), E)
+    tangent = np.where(flowing, E / (1.0 + c * q * (x / SIGMA0) ** (q - 1) / SIGMA0), E)
     return new_stress, new_plastic, tangent
 
 
