@@ -138,7 +138,10 @@ class ParkesCantilever(eqx.Module):
     """Parkes's solution (see the module docstring).
 
     - `tip_deflection`: the final tip deflection (small-deflection theory).
-    - `root_rotation`: the final rotation at the root hinge, radians.
+    - `root_rotation`: the final kink at the root, radians (with the pulse's when the
+      pulse outlasts the travelling phase and its hinge stands at the root).
+    - `pulse_rotation`: the kink left at `hinge_start` by the pulse (the root's when the
+      hinge stands at the root: `root_rotation` includes it then).
     - `travelling_deflection`: the tip deflection gained before the hinge reaches the root
       (pulse and travelling-hinge phases).
     - `hinge_start`: xi0, where the hinge stands while the pulse acts (0 for an impulse;
@@ -154,6 +157,7 @@ class ParkesCantilever(eqx.Module):
 
     tip_deflection: Scalar
     root_rotation: Scalar
+    pulse_rotation: Scalar
     travelling_deflection: Scalar
     hinge_start: Scalar
     root_time: Scalar
@@ -293,6 +297,7 @@ def _parkes(M, V0, M0, m, L, tau, n):
     return ParkesCantilever(
         tip_deflection=tip_deflection,
         root_rotation=root_rotation,
+        pulse_rotation=theta0,
         travelling_deflection=travelling,
         hinge_start=xi0,
         root_time=t_root,
