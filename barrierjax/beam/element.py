@@ -146,7 +146,7 @@ def _hermite(xi, L):
     return n, dn
 
 
-def local_mass(rho, A, I, L):  # noqa: E741
+def local_mass(rho, A, I, L):
     """Consistent mass (4.2.35) in the chord frame, dofs (u1, w1, th1, u2, w2, th2): rho A
     int (phi_u^T phi_u + phi_w^T phi_w) + rho I int phi_w'^T phi_w', by 4-point Gauss (exact
     for the degree-6 integrands)."""
@@ -174,7 +174,7 @@ def rotation(c, s):
     return jnp.block([[block, z3], [z3, block]])
 
 
-def element_mass(rho, A, I, X1, X2, q):  # noqa: E741
+def element_mass(rho, A, I, X1, X2, q):
     """Global consistent mass of an element whose chord is at X + q: T^T m T (4.2.35)."""
     L0 = jnp.sqrt(jnp.sum((X2 - X1) ** 2))
     d = X2 - X1 + q[3:5] - q[0:2]

@@ -84,7 +84,7 @@ class LayeredSection(eqx.Module):
         return jnp.sum(self.area)
 
     @property
-    def I(self):  # noqa: E743
+    def I(self):
         return jnp.sum(self.area * self.z**2)
 
     def init(self):

@@ -200,7 +200,7 @@ def init_sections(model):
     """Unstressed fibres of every element and point: leaves of shape (n_el, n_pts, n_fib)."""
     stress, state = model.section.init()
     shape = (len(model.connectivity), model.n_points)
-    grow = lambda x: jnp.broadcast_to(x, shape + x.shape)  # noqa: E731
+    grow = lambda x: jnp.broadcast_to(x, shape + x.shape)
     return grow(stress), jax.tree.map(grow, state)
 
 
@@ -291,7 +291,7 @@ def mass_matrix(model, u):
     idx = model.element_dofs()
     conn = np.asarray(model.connectivity).reshape(-1, 2)
     X1, X2 = model.coords[conn[:, 0]], model.coords[conn[:, 1]]
-    A, I = model.section.A, model.section.I  # noqa: E741
+    A, I = model.section.A, model.section.I
     m_el = jax.vmap(lambda a, b, q: element_mass(model.rho, A, I, a, b, q))(X1, X2, u[idx])
     n = model.n_dofs
     M = jnp.zeros((n, n), u.dtype).at[idx[:, :, None], idx[:, None, :]].add(m_el)
