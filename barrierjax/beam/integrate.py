@@ -159,7 +159,7 @@ def integrate(
     dtype = model.coords.dtype
     line_search = int(line_search)
     lengths = jnp.asarray(0.5 ** np.arange(max(line_search, 1)), dtype)
-    kw = dict(scheme=material, iterations=material_iterations)
+    kw = {"scheme": material, "iterations": material_iterations}
 
     def step(carry, dt):
         t, u, v, f_int, stress, state, work = carry

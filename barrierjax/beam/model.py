@@ -88,8 +88,9 @@ def beam_model(
     conn = tuple((int(i), int(j)) for i, j in connectivity)
     if len(conn) == 0 or any(not (0 <= i < n and 0 <= j < n and i != j) for i, j in conn):
         raise ValueError(f"connectivity must be pairs of distinct node indices < {n}; got {conn}")
-    lengths = np.linalg.norm(np.asarray([coords[j] - coords[i] for i, j in conn]), axis=1)
-    if not np.all(lengths > 0):
+    traced = isinstance(coords, jax.core.Tracer)
+    lengths = None if traced else np.linalg.norm([coords[j] - coords[i] for i, j in conn], axis=1)
+    if not traced and not np.all(lengths > 0):
         raise ValueError(f"connectivity must join nodes at distinct positions; got {conn}")
     fixed_set = {int(d) for d in fixed}
     if any(not 0 <= d < 3 * n for d in fixed_set):
