@@ -77,6 +77,18 @@ def _ops():
     return ops
 
 
+def _retry(ops, dt, fallbacks) -> bool:
+    """Redo a failed step with each fallback algorithm in turn; Newton again after."""
+    ok = False
+    for name in fallbacks:
+        ops.algorithm(name)
+        if ops.analyze(1, dt) == 0:
+            ok = True
+            break
+    ops.algorithm("Newton")
+    return ok
+
+
 def _build(ops, p, *, n_elements, n_fibres, n_integration_points, integration):
     ops.wipe()
     ops.model("basic", "-ndm", 2, "-ndf", 3)
@@ -109,6 +121,7 @@ def run_example_1(
     tolerance=1e-10,
     max_iterations=50,
     stop_at_rest=False,
+    fallbacks=("NewtonLineSearch", "KrylovNewton"),
     **overrides,
 ) -> OpenSeesRun:
     """Run Example 1 in OpenSees (see the module docstring) and return an `OpenSeesRun`.
@@ -117,7 +130,9 @@ def run_example_1(
     stops at I L / M0 = 0.093 s); `n_elements`, `n_fibres` (layers through the depth),
     `n_integration_points` and `integration` (an OpenSees beamIntegration name) set the
     mesh and the section; `tolerance` and `max_iterations` Newton's NormDispIncr test;
-    `stop_at_rest`: stop at the first rest of the tip; `overrides`: any of `EXAMPLE_1`'s
+    `stop_at_rest`: stop at the first rest of the tip; `fallbacks`: the OpenSees
+    algorithms tried, in turn, on a step where Newton fails (Newton again on the next
+    step; `parameters["retried_steps"]` counts them); `overrides`: any of `EXAMPLE_1`'s
     entries (e.g. E=30e9 for a stiffer beam)."""
     ops = _ops()
     unknown = set(overrides) - set(EXAMPLE_1)
@@ -154,12 +169,15 @@ def run_example_1(
     transverse = np.zeros(n_steps + 1)
     velocity = np.zeros(n_steps + 1)
     converged = True
+    retried = 0
     last = n_steps
     start = time.perf_counter()
     for k in range(1, n_steps + 1):
         if ops.analyze(1, dt) != 0:
-            converged, last = False, k - 1
-            break
+            if not _retry(ops, dt, fallbacks):
+                converged, last = False, k - 1
+                break
+            retried += 1
         times[k] = k * dt
         axial[k] = ops.nodeDisp(tip, 1)
         transverse[k] = ops.nodeDisp(tip, 2)
@@ -208,6 +226,7 @@ def run_example_1(
             tolerance=tolerance,
             pulse_steps=pulse_steps,
             pulse_force=force,
+            retried_steps=retried,
         ),
     )
 
