@@ -154,6 +154,7 @@ def cantilever(
     if n_elements < 1:
         raise ValueError(f"n_elements must be a positive integer; got {n_elements!r}")
     s = jnp.linspace(0.0, 1.0, n_elements + 1, dtype=length.dtype) * length
+    angle_in = angle
     angle = jnp.asarray(angle, length.dtype)
     coords = jnp.stack([s * jnp.cos(angle), s * jnp.sin(angle)], axis=-1)
     n = n_elements + 1
@@ -161,7 +162,7 @@ def cantilever(
     inertias = jnp.zeros(n, length.dtype).at[-1].set(non_negative("tip_inertia", tip_inertia))
     loads = ()
     if tip_impulse is not None:
-        if float(np.cos(float(angle))) != 1.0:
+        if isinstance(angle_in, jax.core.Tracer) or float(np.cos(float(angle_in))) != 1.0:
             raise ValueError("angle must be 0 for a tip pulse (loads are along global dofs)")
         loads = ((3 * n_elements + 1, tip_impulse, duration),)
     return beam_model(
