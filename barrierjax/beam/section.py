@@ -110,6 +110,7 @@ def _secant(u, q):
     return jnp.where(small, q - 0.5 * q * (q - 1) * u, exact)
 
 
+@jax.jit
 def _fibre_stress_bar(rho, t, q):
     """sigma/sigma0 of a fibre strained from rest at the dimensionless rate rho for a time t.
 
@@ -153,6 +154,7 @@ def _graded_panel(start, end, dtype):
     return z, jnp.abs(span) * jnp.asarray(weights, dtype)
 
 
+@jax.jit
 def _section_bar(t, kappa_rate, extension_rate, q):
     """(N_, M_) at the dimensionless time t under the rates kappa_' > 0 and lambda_'."""
     t, kappa_rate, extension_rate, q = jnp.broadcast_arrays(t, kappa_rate, extension_rate, q)
@@ -240,6 +242,7 @@ _ASYMPTOTIC_FROM = 40.0
 _ASYMPTOTIC_TERMS = 40
 
 
+@jax.jit
 def _expi_scaled(x):
     """e^-x Ei(x) for x > 0, by its asymptotic series sum k!/x^(k+1) for large x (where
     e^x overflows; at x = 40 the smallest term is about 1e-16 of the sum)."""
