@@ -105,7 +105,7 @@ def _saturation(s, q):
 def _secant(u, q):
     """(1 - (1 - u)^q)/u for u in (0, 1], with its limit q - q (q - 1) u/2 as u -> 0."""
     small = u < 1e-8
-    u_safe = jnp.where(small, jnp.ones_like(u), u)
+    u_safe = jnp.where(small, 0.5 * jnp.ones_like(u), u)
     exact = -jnp.expm1(q * jnp.log1p(-u_safe)) / u_safe
     return jnp.where(small, q - 0.5 * q * (q - 1) * u, exact)
 
