@@ -386,8 +386,11 @@ def plot(out: Path, rows) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    laws = ("LinearOverstress", "LogOverstress", "CowperSymonds")
-    fig, axes = plt.subplots(1, 3, figsize=(15, 5), sharey=True)
+    laws = [law for law in LAWS if any(r["law"] == law for r in rows)]
+    ncols = min(3, len(laws))
+    nrows = -(-len(laws) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(5 * ncols, 4.5 * nrows), sharey=True)
+    axes = np.atleast_1d(axes).ravel()
     markers = {"implicit": "o", "report": "s", "explicit": "x", "diffrax": "^", "scipy Radau": "v"}
     for ax, name in zip(axes, laws):
         for k, method in enumerate(markers):
@@ -414,7 +417,8 @@ def plot(out: Path, rows) -> Path:
         ax.set_title(name)
         ax.set_xlabel("time per history, s")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0].set_ylabel("max |error| / sigma0 (unstable: hollow, at 1)")
+    for ax in axes[::ncols]:
+        ax.set_ylabel("max |error| / sigma0 (unstable: hollow, at 1)")
     axes[0].legend()
     fig.suptitle(
         "Uniaxial rate laws: error against run time over rates 1e-3 .. 1e4/s and tau 1 .. 1e-7 s"
