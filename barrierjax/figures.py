@@ -1016,3 +1016,7 @@ def _figure_3_4_9() -> Figure:
         "-12.5 % ($\\eta_0$ = 5) from its coarse scheme (benchmarks/axial_force.py)",
     )
     return fig
+
+
+# Chapter 4's figures register themselves on import (they draw from `barrierjax.beam`).
+from . import figures_beam  # noqa: F401

@@ -68,6 +68,7 @@ def test_normal_impact_benchmark_quick(tmp_path):
         assert (out / name).stat().st_size > 0
 
 
+@pytest.mark.slow
 def test_oblique_impact_benchmark_quick(tmp_path):
     # Two oblique compilations (30-75 s each on 2 shared cores) dominate; the gradient section
     # only exercises its guarded child process, which the quick run stops after 15 s.
@@ -107,6 +108,7 @@ def test_oblique_impact_benchmark_quick(tmp_path):
         assert (out / name).stat().st_size > 0
 
 
+@pytest.mark.slow
 def test_axial_force_benchmark_quick(tmp_path):
     out = tmp_path / "results"
     data = run_quick("axial_force", out, timeout=300)
