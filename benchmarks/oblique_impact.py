@@ -488,7 +488,9 @@ def section_throughput(cfg, seed, scenario_set):
     )
     print(f"{'model':<22}{'batch':>8}{'batch s':>12}{'us/scen':>12}{'scen/s':>11}{'compile s':>11}")
     rows = {"oblique": [], "normal_ode": []}
-    batches = list(cfg["batches"])
+    # The 1e4 sweep is one call of each too: both chunk internally, in chunks sorted by a
+    # predictor of the step count.
+    batches = list(cfg["batches"]) + ([cfg["sweep_batch"]] if cfg["sweep_batch"] else [])
     for n in batches:
         s = scenario_set if cfg["use_scenarios_as_batch"] else batch_inputs(n, seed)
         n = len(s["mass_ratio"])
@@ -501,25 +503,6 @@ def section_throughput(cfg, seed, scenario_set):
                 out, run_s = run_timed(compiled, inputs)
                 nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
                 row.update(timed(n, run_s, compile_s, reused), n_nonfinite=nonfinite)
-            except Exception as exc:  # noqa: BLE001 - a failure is a result
-                drain()
-                row.update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
-            rows[model].append(row)
-            print_row_b(model, row)
-
-    # The 1e4 sweep: one call of each; both chunk internally, in chunks sorted by a
-    # predictor of the step count.
-    n = cfg["sweep_batch"]
-    if n:
-        args = args_of(batch_inputs(n, seed))
-        for model in ("oblique", "normal_ode"):
-            row = dict(batch=n, rtol=THROUGHPUT_RTOL, mode="one call (chunked inside)")
-            try:
-                kind, inputs = ("oblique", args) if model == "oblique" else ("normal", args[:3])
-                compiled, compile_s, _ = executable(kind, inputs, THROUGHPUT_RTOL)
-                out, run_s = run_timed(compiled, inputs)
-                nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
-                row.update(timed(n, run_s, compile_s, False), n_nonfinite=nonfinite)
             except Exception as exc:  # noqa: BLE001 - a failure is a result
                 drain()
                 row.update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
