@@ -70,7 +70,7 @@ def _figure_4_1_2() -> Figure:
 
 @figure("4.1.3", "Different Approximation for the Moment Curvature Relation")
 def _figure_4_1_3() -> Figure:
-    fig = Figure(figsize=(7, 5), layout="constrained")
+    fig = Figure(figsize=(9, 5.5), layout="constrained")
     ax = fig.subplots()
     rate = 1.0
     kappa = jnp.linspace(0.0, 8.0, 400)
@@ -90,7 +90,7 @@ def _figure_4_1_3() -> Figure:
 
 @figure("4.1.7", "Dynamic Yield Surface for Bending and Extension")
 def _figure_4_1_7() -> Figure:
-    fig = Figure(figsize=(7, 6), layout="constrained")
+    fig = Figure(figsize=(10, 7), layout="constrained")
     ax = fig.subplots()
     ratio = jnp.concatenate([jnp.linspace(0.0, 2.0, 200), 2.0 + jnp.geomspace(1e-3, 1e4, 300)])
     for k, rate in enumerate(YIELD_RATES_4_1_7):
