@@ -248,7 +248,19 @@ class StrainDependentOverstress(OverstressLaw):
         return self.tau * rate * (self.eps0 - jnp.abs(strain)) / self.eps0
 
 
-class LogOverstress(OverstressLaw):
+class _CharacteristicStressLaw(OverstressLaw):
+    """A law whose flow is sigma_c/tau times a function of x/sigma_c (logarithmic, sinh)."""
+
+    sigma_c: jnp.ndarray
+    tau: jnp.ndarray
+
+    def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=12):
+        self._init_common(E, sigma0, elastic_unloading, iterations)
+        self.sigma_c = positive("sigma_c", sigma_c)
+        self.tau = positive("tau", tau)
+
+
+class LogOverstress(_CharacteristicStressLaw):
     """(2.2.6): g = sigma_c/tau (exp(x/sigma_c) - 1): an overstress logarithmic in the rate.
 
     The printed (2.2.6) has the exponent -(sigma - f)/sigma_c; the sign must be + for g > 0
@@ -260,14 +272,6 @@ class LogOverstress(OverstressLaw):
     (1 + E alpha tau / sigma_c) where it must divide (its own asymptote needs the division).
     """
 
-    sigma_c: jnp.ndarray
-    tau: jnp.ndarray
-
-    def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=12):
-        self._init_common(E, sigma0, elastic_unloading, iterations)
-        self.sigma_c = positive("sigma_c", sigma_c)
-        self.tau = positive("tau", tau)
-
     def flow(self, overstress, static_stress, strain):
         return self.sigma_c / self.tau * jnp.expm1(overstress / self.sigma_c)
 
@@ -275,17 +279,9 @@ class LogOverstress(OverstressLaw):
         return self.sigma_c * jnp.log1p(self.tau * rate / self.sigma_c)
 
 
-class SinhOverstress(OverstressLaw):
+class SinhOverstress(_CharacteristicStressLaw):
     """g = sigma_c/tau sinh(x/sigma_c) (thermally activated dislocation motion, Dorn and Mote);
     written for x > 0 only, so that the law keeps the elastic range of 2.2."""
-
-    sigma_c: jnp.ndarray
-    tau: jnp.ndarray
-
-    def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=12):
-        self._init_common(E, sigma0, elastic_unloading, iterations)
-        self.sigma_c = positive("sigma_c", sigma_c)
-        self.tau = positive("tau", tau)
 
     def flow(self, overstress, static_stress, strain):
         return self.sigma_c / self.tau * jnp.sinh(overstress / self.sigma_c)
