@@ -1,4 +1,5 @@
-"""Figures of report section 4.1, viscoplastic beam sections (`barrierjax.beam.section`).
+"""Figures of report chapter 4: viscoplastic beam sections (4.1, `barrierjax.beam.section`)
+and the cantilever examples (4.3, `barrierjax.beam.report_example`).
 
 - 4.1.2: M/M0 against kappa/kappa_e at constant curvature rates, for the section's own
   linear law (4.1.2) in the report's dimensionless variables (4.1.4), with the static
@@ -8,12 +9,22 @@
 - 4.1.3: the approximations (4.1.14)-(4.1.17) against the exact curve (4.1.12), kappa_' = 1.
 - 4.1.7: the dynamic yield surfaces (4.1.45)-(4.1.46) at several rates D, with the static
   surface |M_| + N_^2 = 1 and the high-rate ellipse 4 N_^2 + 3 M_^2 = D^2.
+- 4.3.2-4.3.7: Examples 1, 2 and 3 of 4.3 at the report's data and steps (sub-stepped, scheme
+  "damped-newmark"): the final configuration, at the tip's rest (its largest deflection,
+  `barrierjax.beam.tip_rest`), and the tip's
+  displacements, each with the law (4.3.1) and, dashed, its rate-independent limit. The
+  report prints no numbers for these; its text says the tip mass makes the beam rotate nearly
+  rigidly about a hinge at the root, and that without one the curvature spreads to the tip.
 """
+
+from functools import cache
 
 import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
+from .beam import report_example
+from .beam.plots import shape_figure, tip_figure
 from .beam.section import (
     moment_curvature,
     moment_curvature_bar,
@@ -117,3 +128,58 @@ def _figure_4_1_7() -> Figure:
         "(4.1.45)-(4.1.46), D = (lambda_'^2 + (4/3) kappa_'^2)^1/2; dotted: 4N^2 + 3M^2 = D^2",
     )
     return fig
+
+
+# --------------------------------------------------------------------------------------
+# 4.3: the cantilever examples.
+
+
+@cache
+def example_runs(n: int) -> dict:
+    """Example `n` with the law (4.3.1) and with its rate-independent limit, labelled."""
+    return {
+        "Cowper-Symonds (4.3.1)": report_example(n),
+        "rate-independent": report_example(n, rate_dependent=False),
+    }
+
+
+def _configuration(number: str, n: int) -> Figure:
+    fig = shape_figure(example_runs(n))
+    _title(fig, number, "thin: the law (4.3.1) at earlier times")
+    return fig
+
+
+def _tip(number: str, n: int) -> Figure:
+    fig = tip_figure(example_runs(n))
+    _title(fig, number, "solid: the law (4.3.1); dashed: rate-independent; grey: the tip at rest")
+    return fig
+
+
+@figure("4.3.2", "Final Configuration of Example (1)")
+def _figure_4_3_2() -> Figure:
+    return _configuration("4.3.2", 1)
+
+
+@figure("4.3.3", "Displacement of the Tip, Example (1)")
+def _figure_4_3_3() -> Figure:
+    return _tip("4.3.3", 1)
+
+
+@figure("4.3.4", "Final Configuration of Example (2)")
+def _figure_4_3_4() -> Figure:
+    return _configuration("4.3.4", 2)
+
+
+@figure("4.3.5", "Displacements of the Tip Mass, Example (2)", printed=False)
+def _figure_4_3_5() -> Figure:
+    return _tip("4.3.5", 2)
+
+
+@figure("4.3.6", "Final Configuration of Example (3)", printed=False)
+def _figure_4_3_6() -> Figure:
+    return _configuration("4.3.6", 3)
+
+
+@figure("4.3.7", "Displacements of the Free End, Example (3)", printed=False)
+def _figure_4_3_7() -> Figure:
+    return _tip("4.3.7", 3)

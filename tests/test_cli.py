@@ -225,6 +225,7 @@ def test_oblique_figures_registered():
     assert list(figures.FIGURES) == [
         "2.2", "2.3", "3.1", "3.5", "3.2.2", "3.2.3", "3.2.4", "3.3.3", "3.3.4", "3.3.5", "3.3.6",
         "3.4.2", "3.4.3", "3.4.4", "3.4.5", "3.4.9", "4.1.2", "4.1.3", "4.1.7",
+        "4.3.2", "4.3.3", "4.3.4", "4.3.5", "4.3.6", "4.3.7",
     ]
     assert figures.FIGURES["3.3.6"].caption == "Barrier Displacement Pattern"
     assert figures.FIGURES["3.3.6"].printed

@@ -11,12 +11,13 @@ incremental elastic-viscoplastic beam element.
 """
 
 from . import element, integrate, layered, model, section
-from .examples import CantileverResult, report_example
+from .examples import CantileverResult, TipRest, report_example, tip_rest
 from .parkes import ParkesCantilever, parkes_cantilever
 
 __all__ = [
     "CantileverResult",
     "ParkesCantilever",
+    "TipRest",
     "element",
     "integrate",
     "layered",
@@ -24,4 +25,5 @@ __all__ = [
     "parkes_cantilever",
     "report_example",
     "section",
+    "tip_rest",
 ]

@@ -32,6 +32,7 @@ its first elastic period is 34 ms: t_end = 0.03 s covers the first maximum and t
 """
 
 import math
+from typing import NamedTuple
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -100,12 +101,19 @@ D_COWPER_SYMONDS = 40.0  # 1/s, (4.3.1)
 Q_COWPER_SYMONDS = 5.0
 
 
+def plastic_moment(n, sigma0=None):
+    """The static plastic moment sigma0 B H^2 / 4 (lb in) of Example `n`'s section."""
+    data = EXAMPLES[n]
+    return (data["sigma0"] if sigma0 is None else sigma0) * data["B"] * data["H"] ** 2 / 4
+
+
 class CantileverResult(eqx.Module):
     """One row per saved time (the report's steps; the initial state first)."""
 
     times: jnp.ndarray  # (n,)
     tip_displacement: jnp.ndarray  # (n, 2): axial (along the beam), transverse
     tip_rotation: jnp.ndarray  # (n,)
+    tip_velocity: jnp.ndarray  # (n, 2): axial, transverse
     node_coordinates: jnp.ndarray  # (n, n_nodes, 2): deformed shapes
     root_moment: jnp.ndarray  # (n,) at the clamped end
     root_axial_force: jnp.ndarray  # (n,)
@@ -171,6 +179,7 @@ def cantilever_result(model, history):
         times=history.times,
         tip_displacement=u[:, -3:-1],
         tip_rotation=u[:, -1],
+        tip_velocity=history.velocity[:, -3:-1],
         node_coordinates=coords,
         root_moment=history.M[:, 0, 0],
         root_axial_force=history.N[:, 0, 0],
@@ -227,6 +236,41 @@ def report_example(
 @eqx.filter_jit
 def _run(model, dts, scheme, substeps, iterations):
     return integrate(model, dts, scheme=scheme, substeps=substeps, iterations=iterations)
+
+
+class TipRest(NamedTuple):
+    """The tip at rest at its largest transverse deflection (the report's "final
+    configuration corresponding to zero velocity of the tip"): where the transverse velocity
+    crosses zero at the largest saved deflection, linearly interpolated between the saved
+    times `index - 1` and `index`; all nan (index -1) if the deflection still grows at the
+    end of the run."""
+
+    time: float
+    index: int
+    tip_displacement: np.ndarray  # (2,) axial, transverse
+    root_rotation: float
+
+
+def tip_rest(result) -> TipRest:
+    """The tip's rest at its largest deflection in `result` (a `CantileverResult`), as numpy."""
+    velocity = np.asarray(result.tip_velocity[:, 1])
+    peak = int(np.argmax(np.asarray(result.tip_displacement[:, 1])))
+    if peak == len(velocity) - 1 or peak == 0:
+        return TipRest(math.nan, -1, np.full(2, math.nan), math.nan)
+    k = peak + 1 if velocity[peak] > 0 else peak
+    v0, v1 = velocity[k - 1], velocity[k]
+    s = v0 / (v0 - v1) if v0 != v1 else 1.0
+
+    def at(values):
+        values = np.asarray(values)
+        return values[k - 1] + s * (values[k] - values[k - 1])
+
+    return TipRest(
+        float(at(result.times)),
+        k,
+        at(result.tip_displacement),
+        float(at(result.root_rotation)),
+    )
 
 
 def final_state(result):
