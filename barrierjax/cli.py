@@ -251,6 +251,7 @@ def _scene_error(error: Exception) -> CommandError:
 
 CANTILEVER = re.compile(r"cantilever-(\d+)")
 CANTILEVER_OPTIONS = ("rate_independent", "scheme", "dt", "t_end", "elements")
+NEWTON_WARNING = 1e-6  # relative residual above which a step is reported unconverged
 
 
 def cantilever_dict(n: int, result, *, rate_dependent: bool, scheme: str) -> dict:
@@ -350,6 +351,11 @@ def format_cantilever_summary(data: dict) -> str:
         ),
         f"  largest Newton residual       {data['max_newton_residual']:10.2e} (relative)",
     ]
+    if data["max_newton_residual"] > NEWTON_WARNING:
+        lines.append(
+            "  warning: Newton did not converge on some steps; a smaller --dt (more sub-steps) "
+            "converges"
+        )
     return "\n".join(lines)
 
 

@@ -58,6 +58,9 @@ def test_run_cantilever_json_matches_report_example(capsys, tmp_path, short_runs
     assert data["peak_root_moment_lb_in"] > M0
     assert data["max_newton_residual"] < 1e-8
     assert data["inputs"]["impulse_lb_s"] == 0.075 and data["inputs"]["tip_mass_lb_s2_in"] == 0
+    assert "did not converge" not in cli.format_cantilever_summary(data)
+    unconverged = dict(data, max_newton_residual=1e-3)
+    assert "warning: Newton did not converge" in cli.format_cantilever_summary(unconverged)
     names = ["deformed_shape.png", "tip_histories.png", "root_histories.png"]
     assert data["plots"] == [str(tmp_path / name) for name in names]
     for name in names:
