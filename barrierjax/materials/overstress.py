@@ -163,8 +163,8 @@ class OverstressLaw(eqx.Module):
         def value_and_slope(law, x, *args):
             return jax.jvp(lambda y: law._residual(y, *args), (x,), (jnp.ones_like(x),))
 
-        def safeguarded_newton(_, carry):
-            x, low, high, last_step = carry
+        def safeguarded_newton(carry):
+            x, low, high, last_step, _, iteration = carry
             r, dr = value_and_slope(frozen[0], x, *frozen[1:])
             low = jnp.where(r <= 0, x, low)
             high = jnp.where(r >= 0, x, high)
@@ -175,8 +175,9 @@ class OverstressLaw(eqx.Module):
             new = jnp.where(use_newton, newton, (low + high) / 2)
             # Converged to rounding: stay. Otherwise a residual of rounding noise fails the
             # step test and bisects towards a stale end of the bracket, far from the root.
-            new = jnp.where(jnp.abs(r) <= tolerance, x, new)
-            return new, low, high, new - x
+            converged = jnp.abs(r) <= tolerance
+            new = jnp.where(converged, x, new)
+            return new, low, high, new - x, jnp.all(converged), iteration + 1
 
         # Start at x0 = min(x_trial, g^-1(x_trial / dt)): the residual is >= 0 there (either
         # dt g(x0) >= x_trial - x0 or x0 = x_trial), and near the root when the step is stiff,
@@ -186,8 +187,11 @@ class OverstressLaw(eqx.Module):
         absorbed = jnp.where(stiff, x_bound / jnp.where(stiff, dt_frozen, 1.0), jnp.inf)
         x0 = jnp.minimum(x_bound, law.flow_inverse(absorbed, k_frozen, strain_frozen))
         tolerance = 16 * jnp.finfo(x_bound.dtype).eps * (x_bound + k_frozen)
-        start = (x0, jnp.zeros_like(x_trial), x0, 2 * x_bound)
-        x = jax.lax.fori_loop(0, self.iterations, safeguarded_newton, start)[0]
+        start = (x0, jnp.zeros_like(x_trial), x0, 2 * x_bound, jnp.asarray(False), 0)
+        # Up to `iterations`, ending early once every point has converged (it then stays).
+        x = jax.lax.while_loop(
+            lambda c: ~c[4] & (c[5] < self.iterations), safeguarded_newton, start
+        )[0]
         r, dr = value_and_slope(self, x, x_trial, state.kappa, k, strain, dt)
         x = x - r / dr
 
