@@ -133,3 +133,37 @@ def test_materials_benchmark_quick(tmp_path):
     finest = [r for r in data["error_vs_time"] if r["method"] == "implicit" and r["steps"] == 64]
     assert finest and all(r["stable"] and r["error"] < 0.1 for r in finest)
     assert all(row["max_stress_difference"] < 1e-8 for row in data["throughput"])
+
+
+@pytest.mark.slow
+def test_beam_fe_benchmark_quick(tmp_path):
+    # About 2-3 minutes on 2 shared cores, nearly all of it some 15 compilations; OpenSees is
+    # compared when openseespy imports, and skipped by the script otherwise.
+    out = tmp_path / "results"
+    data = run_quick("beam_fe", out, timeout=600)
+    for section in (
+        "meta",
+        "opensees",
+        "convergence",
+        "speed",
+        "vmap",
+        "errors",
+        "stability",
+        "targets",
+    ):
+        assert section in data, section
+    assert data["meta"]["quick"] is True
+    assert set(data["targets"]) <= {"agreement", "speed", "vmap"}
+    for target in data["targets"].values():
+        assert target["verdict"] in ("PASS", "FAIL")
+    # Checks of the benchmark's plumbing, not of speed: the vmapped batch computes what one
+    # call does, "report" is linear acceleration on a rate-independent law, the matched model
+    # agrees with OpenSees where both ran, and the report's own steps blow its scheme up.
+    assert data["vmap"]["vmap_vs_single"] < 1e-10
+    assert data["errors"]["rate_independent"]["report_equals_linear_acceleration"]
+    for row in data["opensees"]:
+        if "opensees" in row and "barrierjax" in row and row["barrierjax"]["converged"]:
+            assert abs(row["rest_difference"]) < 0.02
+    assert data["stability"][0]["report_run_non_finite"]
+    assert data["stability"][0]["bracketed"]
+    assert (out / "beam_fe_error_vs_time.png").stat().st_size > 0
