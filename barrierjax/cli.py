@@ -408,11 +408,16 @@ def _run_cantilever(args, n: int) -> int:
             title=f"Example {n} of report 4.3 ({law}, {scheme})",
             progress=lambda p: _progress(f"writing {p}"),
         )
+    return _report(args, data, plots, format_cantilever_summary)
+
+
+def _report(args, data: dict, plots: list, summary) -> int:
+    """Print a run's `data` (with its `plots`) as JSON, or as `summary(data)` and the plots."""
     data["plots"] = [str(p) for p in plots]
     if args.json:
         print(json.dumps(data, indent=2))
     else:
-        print(format_cantilever_summary(data))
+        print(summary(data))
         if plots:
             print("\nPlots: " + ", ".join(str(p) for p in plots))
     return EXIT_OK
@@ -471,14 +476,7 @@ def _run(args) -> int:
         plots = plotting.write_run_plots(
             result, args.out, title=title, progress=lambda p: _progress(f"writing {p}")
         )
-    data["plots"] = [str(p) for p in plots]
-    if args.json:
-        print(json.dumps(data, indent=2))
-    else:
-        print(format_summary(data))
-        if plots:
-            print("\nPlots: " + ", ".join(str(p) for p in plots))
-    return EXIT_OK
+    return _report(args, data, plots, format_summary)
 
 
 def _figures(args) -> int:
