@@ -17,8 +17,9 @@ Each step solves the nonlinear equilibrium at t + dt,
 
 by Newton's method with the consistent tangent K(u) + M / (beta dt^2) (the report's K*); the
 report solves it once, linearised ("an iteration procedure within each time increment could be
-carried out", p. 4.2): `iterations=1` is the report's single solve, more iterations converge.
-The iterations run on stopped gradients, then one Newton step with gradients,
+carried out", p. 4.2): `iterations=0` is the report's single solve (the final step below
+alone), more iterations converge. The iterations run on stopped gradients, then one Newton
+step with gradients,
 u = u* - J(u*)^-1 r(u*), gives the implicit function theorem's derivative at the converged u*
 (J is held constant in it, exact at convergence): gradients never unroll the iterations.
 
@@ -128,7 +129,9 @@ def integrate(
     """Integrate the beam from rest over the steps `dts` (1-d, static length, may be traced).
 
     scheme: "report" (linear acceleration, beta = 1/6, fibres by the report's alpha scheme
-    (4.2.8)-(4.2.11), as in 4.2), "linear-acceleration" (the same with backward-Euler fibres),
+    (4.2.8)-(4.2.11), as in 4.2; a law without that scheme, such as rate-independent
+    plasticity, keeps its exact return map, and "report" is then "linear-acceleration"),
+    "linear-acceleration" (the same with backward-Euler fibres),
     or "newmark" (average acceleration, beta = 1/4, backward-Euler fibres; the default, the
     only one stable at the report's steps). `beta`, `gamma` override the scheme's. Newton:
     up to `iterations` on stopped gradients (ending early once the relative residual
