@@ -220,10 +220,12 @@ def integrate(
                 step = lengths[jnp.argmin(norms)] * du
             return jnp.where(converged, u1, u1 - step), converged, count + 1
 
-        # Predictor: constant acceleration over the step (u_p = u + dt v + dt^2/2 a).
-        # The iterations stop early once every member (under vmap) has converged: they
-        # carry no derivatives, so a while loop costs the gradient nothing.
-        predictor = base_s + beta * dt_s**2 * jax.lax.stop_gradient(a)
+        # Newton starts from the last converged state, as OpenSees does: a constant-
+        # acceleration predictor overshoots (on Example 1's first step it puts the tip
+        # element's fibres at yield where the converged step is elastic) and plain Newton
+        # then diverges. The iterations stop early once every member (under vmap) has
+        # converged: they carry no derivatives, so a while loop costs the gradient nothing.
+        predictor = u_s
         u_star, _, _ = jax.lax.while_loop(
             lambda c: ~c[1] & (c[2] < int(iterations)),
             newton,
