@@ -180,10 +180,10 @@ def integrate(
         base = u + dt * v + dt**2 * (0.5 - beta) * a
         scale = 1 / (beta * dt**2)
 
-        def residual(mdl, u1, base, M, F, stress, state, dt):
-            f, out = internal_forces(mdl, u1, u, stress, state, dt, **kw)
+        def unbalanced(M, u1, base, f, F, scale):
+            """M a(u1) + f - F on the free dofs (zero on the fixed ones)."""
             r = M @ ((u1 - base) * scale) + f - F
-            return jnp.where(jnp.asarray(free), r, jnp.zeros_like(r)), (f, out)
+            return jnp.where(jnp.asarray(free), r, jnp.zeros_like(r))
 
         def relative(r, f):
             """Newton's residual over the largest free internal force or load."""
@@ -192,22 +192,20 @@ def integrate(
 
         frozen = jax.lax.stop_gradient((model, u, base, M, F, stress, state, dt))
         mdl_s, u_s, base_s, M_s, F_s, stress_s, state_s, dt_s = frozen
+        scale_s = 1 / (beta * dt_s**2)
 
         def jacobian(u1):
             K, f, _ = tangent_stiffness(mdl_s, u1, u_s, stress_s, state_s, dt_s, **kw)
-            r = M_s @ ((u1 - base_s) / (beta * dt_s**2)) + f - F_s
-            r = jnp.where(jnp.asarray(free), r, jnp.zeros_like(r))
-            return K + M_s / (beta * dt_s**2), r, f
+            return K + M_s * scale_s, unbalanced(M_s, u1, base_s, f, F_s, scale_s), f
 
         def residual_norm(u1):
             f, _ = internal_forces(mdl_s, u1, u_s, stress_s, state_s, dt_s, **kw)
-            r = M_s @ ((u1 - base_s) / (beta * dt_s**2)) + f - F_s
-            return jnp.sum(jnp.where(jnp.asarray(free), r, jnp.zeros_like(r)) ** 2)
+            return jnp.sum(unbalanced(M_s, u1, base_s, f, F_s, scale_s) ** 2)
 
         def newton(carry):
             # Newton with a fixed-count line search: the step length of least residual among
             # 1, 1/2, ..., 1/2^(line_search - 1) (a plastic hinge makes the tangent nearly
-            # singular, and full Newton steps from the predictor can then diverge).
+            # singular, and full Newton steps can then diverge).
             u1, _, count = carry
             J, r, f = jacobian(u1)
             converged = relative(r, f) <= tolerance
@@ -225,21 +223,20 @@ def integrate(
         # element's fibres at yield where the converged step is elastic) and plain Newton
         # then diverges. The iterations stop early once every member (under vmap) has
         # converged: they carry no derivatives, so a while loop costs the gradient nothing.
-        predictor = u_s
         u_star, _, _ = jax.lax.while_loop(
             lambda c: ~c[1] & (c[2] < int(iterations)),
             newton,
-            (predictor, jnp.asarray(False), 0),
+            (u_s, jnp.asarray(False), 0),
         )
         J, _, _ = jacobian(u_star)
-        r, _ = residual(model, u_star, base, M, F, stress, state, dt)
+        f_star, _ = internal_forces(model, u_star, u, stress, state, dt, **kw)
+        r = unbalanced(M, u_star, base, f_star, F, scale)
         u1 = u_star - _solve_free(free, jax.lax.stop_gradient(J), r)
         f1, (stress1, state1, N, Mom, strains) = internal_forces(
             model, u1, u, stress, state, dt, **kw
         )
         a1 = (u1 - base) * scale
-        r1 = jnp.where(jnp.asarray(free), M @ a1 + f1 - F, 0.0)
-        rel = jax.lax.stop_gradient(relative(r1, f1))
+        rel = jax.lax.stop_gradient(relative(unbalanced(M, u1, base, f1, F, scale), f1))
         v1 = v + dt * ((1 - gamma) * a + gamma * a1)
         work = work + jnp.dot(u1 - u, F)
         carry = (t + dt, u1, v1, f1, stress1, state1, work)
