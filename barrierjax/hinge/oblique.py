@@ -317,10 +317,11 @@ class _Sliding(eqx.Module):
     slope_work: Scalar
 
 
-def _friction_deceleration(vh, force, p: _Params):
-    """Coulomb: f P / M while the vehicle slides; once it stops sliding, static friction
-    holds it (the barrier takes no axial motion)."""
-    return jnp.where(vh > 0.0, p.friction * force / p.mu, 0.0)
+def _sliding_friction(vh, p: _Params):
+    """The friction coefficient acting on the vehicle: Coulomb's f while it slides; once it
+    stops sliding, static friction holds it (the barrier takes no axial motion), with no
+    tangential deceleration and no work."""
+    return jnp.where(vh > 0.0, p.friction, 0.0)
 
 
 def _crushing_field(t, y: _Crushing, p: _Params, past: _Past) -> _Crushing:
@@ -344,7 +345,7 @@ def _crushing_field(t, y: _Crushing, p: _Params, past: _Past) -> _Crushing:
         position=vh,
         rotation=y.v0 / y.s1,
         vehicle_normal=-vehicle * force / p.mu,
-        vehicle_tangential=-vehicle * _friction_deceleration(vh, force, p),
+        vehicle_tangential=-vehicle * _sliding_friction(vh, p) * force / p.mu,
         crush=vehicle * (y.vehicle_normal - contact_velocity),
         contact_displacement=contact_velocity,
         backing_work=backing,
@@ -364,7 +365,8 @@ def _contact_force(y: _Sliding, p: _Params, past: _Past):
     numerator = (
         p.mu * (s1 * s2 + 3.0) / (2.0 * s1 * s2) + p.mu * vh * v0 / s1 - p.mu * vh**2 * curvature
     )
-    force = numerator / (1.0 - p.friction * theta + 4.0 * p.mu / (s1 + s2))
+    # The friction term: the tangential deceleration f g / mu changes theta V_H.
+    force = numerator / (1.0 - _sliding_friction(vh, p) * theta + 4.0 * p.mu / (s1 + s2))
     return force, theta
 
 
@@ -389,7 +391,7 @@ def _sliding_field(in_contact: bool):
             position=v0 * load_speed,
             rotation=v0 * v0 / y.s1,
             vehicle_normal=zero,
-            vehicle_tangential=-v0 * _friction_deceleration(vh, force, p),
+            vehicle_tangential=-v0 * _sliding_friction(vh, p) * force / p.mu,
             contact_displacement=v0 * contact_velocity,
             backing_work=v0 * backing,
             hinge_work=v0 * hinge,
