@@ -273,9 +273,17 @@ def run_timed(compiled, args, *, warm_up=True, max_reps=20, min_total=0.2):
 def first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     for line in text:
+        if "EquinoxRuntimeError" in line:
+            return line.split("EquinoxRuntimeError:", 1)[-1].strip()[:200]
+    for line in text:
         if "max_steps" in line or "must" in line or "maximum" in line.lower():
             return line.strip()[:200]
     return (text[0] if text else type(exc).__name__)[:200]
+
+
+# The model's own stop where the load catches up with the hinge ahead of it: outside the
+# mechanism of report 3.3, reported as such (not as a solver failure).
+OVERTAKEN = "caught up with the hinge"
 
 
 def as_numpy(result) -> dict:
@@ -735,7 +743,13 @@ def run_one(compiled, s, i) -> dict:
     except Exception as exc:  # noqa: BLE001 - a failure is a result
         drain()
         message = first_line(exc)
-        kind = "max_steps" if "max_steps" in message else "error"
+        kind = (
+            "max_steps"
+            if "max_steps" in message
+            else "overtaken"
+            if OVERTAKEN in message
+            else "error"
+        )
         return dict(status=kind, message=message)
     values = {k: float(getattr(r, k)) for k in FIELDS}
     finite = all(np.isfinite(v) for v in values.values())
@@ -782,7 +796,7 @@ def section_stability(cfg):
         if cfg["d_retry_max_steps"]:
             # Every failure, not only an exhausted budget: heavy vehicles also come back
             # non-finite or with a broken energy balance instead of raising.
-            todo = [i for i, r in enumerate(results) if r["status"] != "ok"]
+            todo = [i for i, r in enumerate(results) if r["status"] not in ("ok", "overtaken")]
             todo = todo[: cfg["d_retry_limit"]]
             if todo:
                 bigger, retry_compile_s, _ = executable(
@@ -822,7 +836,7 @@ def counts(results):
     return out
 
 
-CODES = dict(ok="", max_steps="S", error="X", nonfinite="N", energy="E")
+CODES = dict(ok="", max_steps="S", error="X", nonfinite="N", energy="E", overtaken="O")
 
 
 def print_stability(cfg, s, section):
@@ -833,7 +847,8 @@ def print_stability(cfg, s, section):
     )
     print(
         "  ok / total per (mass ratio, force ratio) over angles, speeds and friction; failures: "
-        "S step budget exhausted, N non-finite output, E energy balance > 1e-6, X other error"
+        "S step budget exhausted, N non-finite output, E energy balance > 1e-6, X other error; "
+        "O: stopped by the model, the load caught up with the hinge ahead of it (outside 3.3)"
     )
     mus, phis = cfg["d_mass_ratios"], cfg["d_force_ratios"]
     corner = "mu \\ phi"
