@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from barrierjax.hinge import normal_impact
-from barrierjax.hinge.oblique import moving_load, oblique_impact
+from barrierjax.hinge.oblique import _quintic_hermite, moving_load, oblique_impact
 
 # Light and moderate vehicles (mu <= 5); see the module's notes on heavy ones.
 NORMAL_CASES = [(5.0, 2.0, 0.6), (0.05, 20.0, 0.2), (1.0, 1.5, 0.7)]
@@ -71,6 +71,32 @@ def _energy_imbalance(r, mu, phi):
 def test_energy_balance_at_every_saved_step(oblique_batch):
     mu, phi = (jnp.array([c[k] for c in OBLIQUE_CASES]) for k in (0, 1))
     assert float(jnp.max(_energy_imbalance(oblique_batch, mu, phi))) < 1e-6
+
+
+def test_error_falls_with_the_tolerance(oblique_batch):
+    # The memory is read through an interpolant of the recorded hinge trace, outside the
+    # step control. With cubic Hermite the exit angle at rtol 1e-9 was 3e-7 degrees off
+    # the rtol 1e-12 solution here, and the speeds 1.3e-8 (error ~ rtol^0.5); the quintic
+    # keeps them at 9e-9 degrees and 5e-10.
+    mu, phi, vn, vh = (jnp.array(c) for c in zip(*OBLIQUE_CASES))
+    reference = oblique_impact(mu, phi, vn, vh, rtol=1e-12, history=True)
+    for field in ("t_final", "w_final", "damage", "exit_normal_speed"):
+        error = jnp.abs(getattr(oblique_batch, field) / getattr(reference, field) - 1.0)
+        assert float(jnp.max(error)) < 5e-9, field
+    angle_error = jnp.abs(oblique_batch.exit_angle_deg - reference.exit_angle_deg)
+    assert float(jnp.max(angle_error)) < 3e-8
+
+
+def test_quintic_hermite_is_exact_on_quintics():
+    coefficients = jnp.array([0.3, 1.2, -0.7, 2.1, -1.5, 0.9])
+    f = lambda x: jnp.polyval(coefficients[::-1], x)
+    df, d2f = jax.grad(f), jax.grad(jax.grad(f))
+    a, b = 0.4, 1.1
+    ends = [(f(x), df(x), d2f(x)) for x in (a, b)]
+    for x in np.linspace(a, b, 7):
+        value, slope = _quintic_hermite((x - a) / (b - a), b - a, *ends)
+        assert float(value) == pytest.approx(float(f(x)), abs=1e-13)
+        assert float(slope) == pytest.approx(float(df(x)), abs=1e-12)
 
 
 def test_vmap_equals_loop(oblique_batch):

@@ -142,8 +142,9 @@ def solve_recorded(
     positive at the start, falls to zero.
 
     `past = view(t, y, args, recording)` is taken at the start of each step and serves
-    every stage of it (by default the whole recording). `record(t, y, f, args)` gives the
-    sample appended to `recording` after each accepted step (and at the start);
+    every stage of it (by default the whole recording). `record(t, y, f, rate, args)` gives
+    the sample appended to `recording` after each accepted step (and at the start and the
+    end), with `f` the field there and `rate` its derivative along the solution, df/dt;
     `max_step(t, y, f, args, past)` bounds the step, for example so that the stages never
     read past what `past` holds. An event
     that is not positive at the start ends the phase there, after no step. A spent step
@@ -153,9 +154,14 @@ def solve_recorded(
     under `vmap`, lax's while loop would select every member's whole buffer at every step,
     and the cost of a step would grow with the buffer's capacity.
     """
+
+    def rate(t, y, f, past):
+        # Only the entries `record` reads survive dead-code elimination.
+        return jax.jvp(lambda t, y: field(t, y, args, past), (t, y), (jnp.ones_like(t), f))[1]
+
     past = view(t0, y0, args, recording)
     f0 = field(t0, y0, args, past)
-    recording = recording.append(record(t0, y0, f0, args))
+    recording = recording.append(record(t0, y0, f0, rate(t0, y0, f0, past), args))
     dtype = jnp.result_type(t0)
     ended_at_start = event(t0, y0, f0, args, past) <= 0.0
 
@@ -170,11 +176,13 @@ def solve_recorded(
         h = jax.lax.stop_gradient(jnp.minimum(h, max_step(t, y, f, args, past)))
         y1, error, f1 = _step(field, t, y, f, h, args, past)
         ratio = _error_ratio(y, y1, error, rtol, atol)
-        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(y1)]))
+        # (A finite state whose field is not would carry a NaN into the next step length.)
+        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves((y1, f1))]))
         accept = (ratio <= 1.0) & finite
         crossed = accept & (event(t + h, y1, f1, args, past) <= 0.0)
         advance = accept & ~crossed
-        new_rec = rec.append(record(t + h, y1, f1, args), when=advance)
+        sample = record(t + h, y1, f1, rate(t + h, y1, f1, past), args)
+        new_rec = rec.append(sample, when=advance)
         keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(advance, a, b), new, old)
         ratio = jax.lax.stop_gradient(ratio)
         factor = jnp.where(finite, jnp.clip(0.9 * ratio**-0.2, 0.2, 5.0), 0.2)
@@ -253,5 +261,6 @@ def solve_recorded(
     length = length - value / jnp.where(slope != 0.0, slope, 1.0)
     length = jnp.where(ended_at_start, 0.0, length)
     y_end, _, f_end = _step(field, t, y, f, length, args, past)
-    recording = recording.append(record(t + length, y_end, f_end, args))
+    rate_end = rate(t + length, y_end, f_end, past)
+    recording = recording.append(record(t + length, y_end, f_end, rate_end, args))
     return PhaseEnd(t + length, y_end, f_end, recording, steps, crossed)

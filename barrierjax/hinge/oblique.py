@@ -25,7 +25,10 @@ and (3.3.21)'s R is V_H Psi'(F) F' + V_H' theta: the first term is V_H^2 times t
 curvature dPsi/dx that the right hinge left behind at the load point. Psi is the curve
 (H, Phi) traced by the right hinge H = F + S1; it is recorded, one sample per accepted
 step, in a fixed-size buffer that the vector field reads (`_solve.recorded_rk`): the delay
-T1 of (3.3.5) is never solved for. Psi = 0 ahead of the initial hinge, x < S*.
+T1 of (3.3.5) is never solved for. Each sample holds Phi, dPhi/dH and d2Phi/dH2 (the last
+from the field's derivative along the solution), and Psi is their quintic Hermite
+interpolant, so that the memory is as accurate as the Dormand-Prince steps that record it.
+Psi = 0 ahead of the initial hinge, x < S*.
 
 Phases.
 1. Crushing (accelerative, in time T): the vehicle crushes at constant force phi; its
@@ -195,12 +198,13 @@ _WINDOW = 8
 
 class _Past(eqx.Module):
     """What a step reads of the right hinge's recorded trace: `_WINDOW` consecutive
-    samples (H, Phi, dPhi/dH) from `start`, the segment's bounds (`_Params.segment`), the
+    samples (H, Phi, dPhi/dH, d2Phi/dH2) from `start`, the segment's bounds (`_Params.segment`), the
     trace's first position S* and `reach`, the furthest position the window covers."""
 
     hinge: Float[Array, " window"]
     rotation: Float[Array, " window"]
     curvature: Float[Array, " window"]
+    curvature_rate: Float[Array, " window"]
     start: Int[Array, ""]
     first: Int[Array, ""]
     last: Int[Array, ""]
@@ -227,9 +231,66 @@ def _past(t, y, p, recording: Recording) -> _Past:
     )
 
 
+def _quintic_hermite(u, width, left, right):
+    """The quintic on [0, 1] through (value, slope, second derivative) at both ends, slopes
+    in x = u width: its value and its slope in x at u."""
+
+    def basis(u):
+        # Value, slope and second-derivative weights of the left end, and their u-slopes.
+        u2, u3, u4, u5 = u * u, u**3, u**4, u**5
+        return (
+            (
+                1 - 10 * u3 + 15 * u4 - 6 * u5,
+                u - 6 * u3 + 8 * u4 - 3 * u5,
+                0.5 * (u2 - 3 * u3 + 3 * u4 - u5),
+            ),
+            (
+                -30 * u2 + 60 * u3 - 30 * u4,
+                1 - 18 * u2 + 32 * u3 - 15 * u4,
+                0.5 * (2 * u - 9 * u2 + 12 * u3 - 5 * u4),
+            ),
+        )
+
+    # The right end's weights are the left end's at 1 - u, with the odd derivative negated.
+    (b0, b1, b2), (d0, d1, d2) = basis(u)
+    (c0, c1, c2), (e0, e1, e2) = basis(1.0 - u)
+    (p0, s0, k0), (p1, s1, k1) = left, right
+    w2 = width * width
+    value = b0 * p0 + width * b1 * s0 + w2 * b2 * k0 + c0 * p1 - width * c1 * s1 + w2 * c2 * k1
+    slope = (
+        d0 * p0 + width * d1 * s0 + w2 * d2 * k0 - e0 * p1 + width * e1 * s1 - w2 * e2 * k1
+    ) / width
+    return value, slope
+
+
+def _cubic_hermite(u, width, left, right):
+    """As `_quintic_hermite`, through (value, slope) at both ends."""
+    (p0, s0), (p1, s1) = left, right
+    u2, u3 = u * u, u * u * u
+    value = (
+        (2 * u3 - 3 * u2 + 1) * p0
+        + (u3 - 2 * u2 + u) * width * s0
+        + (-2 * u3 + 3 * u2) * p1
+        + (u3 - u2) * width * s1
+    )
+    slope = (
+        (6 * u2 - 6 * u) * p0
+        + (3 * u2 - 4 * u + 1) * width * s0
+        + (-6 * u2 + 6 * u) * p1
+        + (3 * u2 - 2 * u) * width * s1
+    ) / width
+    return value, slope
+
+
 def _slope_memory(past: _Past, x):
-    """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by cubic Hermite
-    interpolation of the recorded (H, Phi, dPhi/dH); zero ahead of the initial hinge.
+    """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by quintic Hermite
+    interpolation of the recorded (H, Phi, dPhi/dH, d2Phi/dH2); zero ahead of the initial
+    hinge.
+
+    The interpolant is C2 with error O(step^6): the force reads Psi', and a lower-order or
+    less smooth interpolant would put a kink into the vector field at every recorded
+    sample the load crosses, outside the step control (with cubic Hermite, the error fell
+    only as rtol^0.5).
 
     Only the segment's samples are read, so that a lookup at a jump of Psi' (recorded
     twice, left and right limits) takes the side the load is on whatever the rounding of
@@ -242,28 +303,26 @@ def _slope_memory(past: _Past, x):
     interior = i + 1 <= past.last
     j = jnp.where(interior, i + 1, i)
     pick = lambda samples, k: jnp.sum(jnp.where(offsets == k - past.start, samples, 0.0))
+    data = lambda k: tuple(
+        pick(samples, k) for samples in (past.rotation, past.curvature, past.curvature_rate)
+    )
     h_i, h_j = pick(past.hinge, i), pick(past.hinge, j)
-    phi_i, phi_j = pick(past.rotation, i), pick(past.rotation, j)
-    slope_i, slope_j = pick(past.curvature, i), pick(past.curvature, j)
+    left, right = data(i), data(j)
     width = jnp.where(interior, h_j - h_i, 1.0)
     u = jnp.where(interior, (x - h_i) / width, 0.0)
-    u2, u3 = u * u, u * u * u
-    hermite = (
-        (2 * u3 - 3 * u2 + 1) * phi_i
-        + (u3 - 2 * u2 + u) * width * slope_i
-        + (-2 * u3 + 3 * u2) * phi_j
-        + (u3 - u2) * width * slope_j
-    )
-    hermite_slope = (
-        (6 * u2 - 6 * u) * phi_i
-        + (3 * u2 - 4 * u + 1) * width * slope_i
-        + (-6 * u2 + 6 * u) * phi_j
-        + (3 * u2 - 2 * u) * width * slope_j
-    ) / width
-    # Past the last sample (only within a step, which max_step keeps short): linear.
-    beyond = phi_i + slope_i * (x - h_i)
-    psi = jnp.where(interior, hermite, beyond)
-    dpsi = jnp.where(interior, hermite_slope, slope_i)
+    psi, dpsi = _quintic_hermite(u, width, left, right)
+    # Next to a breakpoint the second derivatives are one-sided limits of a fast-changing
+    # trace: cubic there (the second-derivative data dropped), which stays stable where
+    # breakpoints cluster.
+    at_bound = (i == past.first) | (j == past.last)
+    cubic = _cubic_hermite(u, width, left[:2], right[:2])
+    psi, dpsi = (jnp.where(at_bound, c, q) for c, q in zip(cubic, (psi, dpsi)))
+    # Past the segment's last sample (only within a step, which then ends or is retaken at
+    # the segment's end): linear. The second derivative there can be the one-sided limit
+    # at a breakpoint, orders of magnitude off a step away (at S*, for large force ratios).
+    phi_i, slope_i, _ = left
+    psi = jnp.where(interior, psi, phi_i + slope_i * (x - h_i))
+    dpsi = jnp.where(interior, dpsi, slope_i)
     ahead = x < past.first_hinge
     return jnp.where(ahead, 0.0, psi), jnp.where(ahead, 0.0, dpsi)
 
@@ -407,13 +466,22 @@ def _sliding_field(in_contact: bool):
 # quantities of the histories.
 
 
-def _sample(phase, time, v0, s1, s2, position, rotation, hinge_speed, rotation_rate, **extra):
+def _sample(phase, time, v0, s1, s2, position, rotation, f, rate, **extra):
+    """One recorded step. The trace of the right hinge H = F + S1 carries Psi's data at H:
+    Phi, dPhi/dH = Phi'/H' and d2Phi/dH2 = (Phi'' H' - Phi' H'')/H'^3 (primes: the phase's
+    own variable, T or s; the ratios do not depend on which); zero while the hinge stands."""
+    hinge_speed, hinge_acceleration = f.position + f.s1, rate.position + rate.s1
     moving = hinge_speed > 0.0
-    curvature = jnp.where(moving, rotation_rate / jnp.where(moving, hinge_speed, 1.0), 0.0)
+    speed = jnp.where(moving, hinge_speed, 1.0)
+    curvature = jnp.where(moving, f.rotation / speed, 0.0)
+    curvature_rate = jnp.where(
+        moving, (rate.rotation * speed - f.rotation * hinge_acceleration) / speed**3, 0.0
+    )
     return dict(
         hinge=position + s1,
         rotation=rotation,
         curvature=curvature,
+        curvature_rate=curvature_rate,
         phase=jnp.full_like(v0, phase),
         time=time,
         v0=v0,
@@ -424,7 +492,7 @@ def _sample(phase, time, v0, s1, s2, position, rotation, hinge_speed, rotation_r
     )
 
 
-def _record_crushing(t, y: _Crushing, f: _Crushing, p: _Params):
+def _record_crushing(t, y: _Crushing, f: _Crushing, rate: _Crushing, p: _Params):
     return _sample(
         1.0,
         t,
@@ -433,8 +501,8 @@ def _record_crushing(t, y: _Crushing, f: _Crushing, p: _Params):
         y.s2,
         y.position,
         y.rotation,
-        f.position + f.s1,
-        f.rotation,
+        f,
+        rate,
         vehicle_normal=y.vehicle_normal,
         vehicle_tangential=y.vehicle_tangential,
         force=jnp.full_like(y.v0, 0.0 if p.moving_load else 1.0) * p.phi,
@@ -449,7 +517,7 @@ def _record_crushing(t, y: _Crushing, f: _Crushing, p: _Params):
 
 
 def _record_sliding(in_contact: bool):
-    def record(s, y: _Sliding, f: _Sliding, p: _Params):
+    def record(s, y: _Sliding, f: _Sliding, rate: _Sliding, p: _Params):
         # f holds d/ds = V0 d/dT.
         v0 = jnp.exp(y.log_v0)
         if in_contact:
@@ -468,8 +536,8 @@ def _record_sliding(in_contact: bool):
             y.s2,
             y.position,
             y.rotation,
-            f.position + f.s1,
-            f.rotation,
+            f,
+            rate,
             vehicle_normal=vehicle_normal,
             vehicle_tangential=y.vehicle_tangential,
             force=force,
@@ -487,7 +555,7 @@ def _record_sliding(in_contact: bool):
 
 # What the recording keeps: the right hinge's trace for the memory, the motion for the
 # displacement field (max_deflection), and with `history` the rest of each sample.
-_MEMORY = ("hinge", "rotation", "curvature")
+_MEMORY = ("hinge", "rotation", "curvature", "curvature_rate")
 _MOTION = ("time", "v0", "s1", "s2", "position")
 _HISTORY = (
     "phase",
