@@ -27,6 +27,9 @@ It prints tables and writes `oblique_impact.json` and PNG plots to `--out`
     finish, are the outputs finite, does the energy balance close (at every recorded step), how
     many steps. Failures are tabulated, and failed runs are retried with a larger step budget.
 
+`--sections ad` runs only the sections named (the reference is computed only for (a)), and
+writes `oblique_impact_ad.json` and only those sections' plots.
+
 Timing protocol: compile ahead of time (reported separately), one warm-up call, then the best
 of at least 3 calls (a single call where one call takes over 1 s).
 A benchmark reports; it never tunes the model.
@@ -932,100 +935,112 @@ def print_stability(cfg, s, section):
 # Plots.
 
 
-def plots(out_dir: Path, data: dict, cfg: dict):
+def plots(out_dir: Path, data: dict, cfg: dict, run=frozenset("abcd")):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     paths = []
-    rows = [r for r in data["error_vs_time"]["rows"] if r["ok"] and np.isfinite(r["error"])]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
-    if rows:
-        t = [r["per_scenario_s"] for r in rows]
-        e = [max(r["error"], 1e-17) for r in rows]
-        axes[0].loglog(t, e, "o-", label="oblique_impact")
-        for r, ti, ei in zip(rows, t, e):
-            axes[0].annotate(f"{r['rtol']:.0e}", (ti, ei), fontsize=7)
-        steps = [r for r in rows if "steps" in r]
-        if steps:
-            axes[1].loglog([r["steps"]["mean"] for r in steps], [r["error"] for r in steps], "o-")
-            order = data["error_vs_time"]["order"].get("order_vs_steps")
-            if order:
-                axes[1].set_title(f"observed order {order:.2f} (error ~ steps^-p)")
-        else:
-            axes[1].loglog([r["rtol"] for r in rows], e, "o-")
-            axes[1].set_xlabel("rtol")
-    check = data["error_vs_time"]["reference_check"]
-    floor = check.get("error")
-    for ax in axes:
-        if floor:
-            ax.axhline(
-                floor,
-                color="k",
-                ls=":",
-                label=f"reference rtol {cfg['ref_rtol']:.0e} vs {check['rtol']:.0e}",
-            )
+    if "a" in run:
+        rows = [r for r in data["error_vs_time"]["rows"] if r["ok"] and np.isfinite(r["error"])]
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+        if rows:
+            t = [r["per_scenario_s"] for r in rows]
+            e = [max(r["error"], 1e-17) for r in rows]
+            axes[0].loglog(t, e, "o-", label="oblique_impact")
+            for r, ti, ei in zip(rows, t, e):
+                axes[0].annotate(f"{r['rtol']:.0e}", (ti, ei), fontsize=7)
+            steps = [r for r in rows if "steps" in r]
+            if steps:
+                axes[1].loglog(
+                    [r["steps"]["mean"] for r in steps], [r["error"] for r in steps], "o-"
+                )
+                order = data["error_vs_time"]["order"].get("order_vs_steps")
+                if order:
+                    axes[1].set_title(f"observed order {order:.2f} (error ~ steps^-p)")
+            else:
+                axes[1].loglog([r["rtol"] for r in rows], e, "o-")
+                axes[1].set_xlabel("rtol")
+        check = data["error_vs_time"]["reference_check"]
+        floor = check.get("error")
+        for ax in axes:
+            if floor:
+                ax.axhline(
+                    floor,
+                    color="k",
+                    ls=":",
+                    label=f"reference rtol {cfg['ref_rtol']:.0e} vs {check['rtol']:.0e}",
+                )
+            ax.grid(True, which="both", alpha=0.3)
+            ax.set_ylabel("max error (relative; exit angle absolute, deg)")
+        axes[0].set_xlabel("time per scenario [s] (one vmapped call)")
+        axes[0].set_title(f"oblique_impact: error vs time, {data['meta']['n_scenarios']} scenarios")
+        if rows and any("steps" in r for r in rows):
+            axes[1].set_xlabel("mean recorded steps per scenario (all phases)")
+        axes[0].legend(fontsize=7)
+        paths.append(save(fig, out_dir / "oblique_impact_error_vs_time.png"))
+
+    if "b" in run:
+        fig, ax = plt.subplots(figsize=(7, 5))
+        for model, label in (
+            ("oblique", "oblique_impact"),
+            ("normal_ode", "normal_impact ODE (Tsit5)"),
+        ):
+            ok = [r for r in data["throughput"]["rows"][model] if r["ok"]]
+            if ok:
+                ax.loglog(
+                    [r["batch"] for r in ok], [r["per_second"] for r in ok], "o-", label=label
+                )
+        ax.set_xlabel("batch size")
+        ax.set_ylabel("scenarios per second")
+        ax.set_title(f"throughput, rtol {THROUGHPUT_RTOL:.0e}, CPU")
         ax.grid(True, which="both", alpha=0.3)
-        ax.set_ylabel("max error (relative; exit angle absolute, deg)")
-    axes[0].set_xlabel("time per scenario [s] (one vmapped call)")
-    axes[0].set_title(f"oblique_impact: error vs time, {data['meta']['n_scenarios']} scenarios")
-    if rows and any("steps" in r for r in rows):
-        axes[1].set_xlabel("mean recorded steps per scenario (all phases)")
-    axes[0].legend(fontsize=7)
-    paths.append(save(fig, out_dir / "oblique_impact_error_vs_time.png"))
+        ax.legend(fontsize=8)
+        paths.append(save(fig, out_dir / "oblique_impact_throughput.png"))
 
-    fig, ax = plt.subplots(figsize=(7, 5))
-    for model, label in (
-        ("oblique", "oblique_impact"),
-        ("normal_ode", "normal_impact ODE (Tsit5)"),
-    ):
-        ok = [r for r in data["throughput"]["rows"][model] if r["ok"]]
-        if ok:
-            ax.loglog([r["batch"] for r in ok], [r["per_second"] for r in ok], "o-", label=label)
-    ax.set_xlabel("batch size")
-    ax.set_ylabel("scenarios per second")
-    ax.set_title(f"throughput, rtol {THROUGHPUT_RTOL:.0e}, CPU")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    paths.append(save(fig, out_dir / "oblique_impact_throughput.png"))
+    if "c" in run:
+        fig, ax = plt.subplots(figsize=(7, 4))
+        rows = data["gradient"]["rows"]
+        labels = [f"{r['batch']}" if r["batch"] else "1, no vmap" for r in rows]
+        ax.bar(range(len(rows)), [r["ratio"] if r["ok"] else 0.0 for r in rows])
+        for k, r in enumerate(rows):
+            if not r["ok"]:
+                ax.annotate("failed", (k, 0.0), ha="center", va="bottom", fontsize=8, rotation=90)
+        ax.set_xticks(range(len(rows)), labels)
+        ax.set_xlabel("batch size")
+        ax.set_ylabel("grad time / forward time")
+        ax.set_title("oblique_impact gradient cost (5 inputs)")
+        ax.grid(True, which="both", alpha=0.3)
+        paths.append(save(fig, out_dir / "oblique_impact_gradient.png"))
 
-    fig, ax = plt.subplots(figsize=(7, 4))
-    rows = data["gradient"]["rows"]
-    labels = [f"{r['batch']}" if r["batch"] else "1, no vmap" for r in rows]
-    ax.bar(range(len(rows)), [r["ratio"] if r["ok"] else 0.0 for r in rows])
-    for k, r in enumerate(rows):
-        if not r["ok"]:
-            ax.annotate("failed", (k, 0.0), ha="center", va="bottom", fontsize=8, rotation=90)
-    ax.set_xticks(range(len(rows)), labels)
-    ax.set_xlabel("batch size")
-    ax.set_ylabel("grad time / forward time")
-    ax.set_title("oblique_impact gradient cost (5 inputs)")
-    ax.grid(True, which="both", alpha=0.3)
-    paths.append(save(fig, out_dir / "oblique_impact_gradient.png"))
-
-    sections = data["stability"]["sections"]
-    s = data["stability"]["scenarios"]
-    mus, phis = cfg["d_mass_ratios"], cfg["d_force_ratios"]
-    fig, axes = plt.subplots(1, len(sections), figsize=(5.5 * len(sections), 4.5), squeeze=False)
-    for ax, section in zip(axes[0], sections):
-        frac = np.zeros((len(mus), len(phis)))
-        for a, mu in enumerate(mus):
-            for b, phi in enumerate(phis):
-                idx = [
-                    i
-                    for i in range(len(section["results"]))
-                    if s["mass_ratio"][i] == mu and s["force_ratio"][i] == phi
-                ]
-                frac[a, b] = np.mean([section["results"][i]["status"] == "ok" for i in idx])
-        im = ax.imshow(frac, vmin=0, vmax=1, cmap="RdYlGn", origin="lower", aspect="auto")
-        ax.set_xticks(range(len(phis)), [f"{p:g}" for p in phis])
-        ax.set_yticks(range(len(mus)), [f"{m:g}" for m in mus])
-        ax.set_xlabel("force ratio")
-        ax.set_ylabel("mass ratio")
-        ax.set_title(f"fraction ok, rtol {section['rtol']:.0e}, max_steps {section['max_steps']}")
-        fig.colorbar(im, ax=ax)
-    paths.append(save(fig, out_dir / "oblique_impact_stability.png"))
+    if "d" in run:
+        sections = data["stability"]["sections"]
+        s = data["stability"]["scenarios"]
+        mus, phis = cfg["d_mass_ratios"], cfg["d_force_ratios"]
+        fig, axes = plt.subplots(
+            1, len(sections), figsize=(5.5 * len(sections), 4.5), squeeze=False
+        )
+        for ax, section in zip(axes[0], sections):
+            frac = np.zeros((len(mus), len(phis)))
+            for a, mu in enumerate(mus):
+                for b, phi in enumerate(phis):
+                    idx = [
+                        i
+                        for i in range(len(section["results"]))
+                        if s["mass_ratio"][i] == mu and s["force_ratio"][i] == phi
+                    ]
+                    frac[a, b] = np.mean([section["results"][i]["status"] == "ok" for i in idx])
+            im = ax.imshow(frac, vmin=0, vmax=1, cmap="RdYlGn", origin="lower", aspect="auto")
+            ax.set_xticks(range(len(phis)), [f"{p:g}" for p in phis])
+            ax.set_yticks(range(len(mus)), [f"{m:g}" for m in mus])
+            ax.set_xlabel("force ratio")
+            ax.set_ylabel("mass ratio")
+            ax.set_title(
+                f"fraction ok, rtol {section['rtol']:.0e}, max_steps {section['max_steps']}"
+            )
+            fig.colorbar(im, ax=ax)
+        paths.append(save(fig, out_dir / "oblique_impact_stability.png"))
     return paths
 
 
@@ -1052,7 +1067,13 @@ def jsonable(x):
 def main(argv=None):
     parser = argument_parser(__doc__)
     parser.add_argument("--grad-child", help=argparse.SUPPRESS)  # internal: section (c)
+    parser.add_argument(
+        "--sections", default="abcd", help="which of the sections a, b, c, d to run (default abcd)"
+    )
     args = parser.parse_args(argv)
+    if not args.sections or set(args.sections) - set("abcd"):
+        parser.error(f"--sections takes letters from 'abcd'; got {args.sections!r}")
+    run = set(args.sections)
     if args.grad_child:
         return grad_child_main(args.grad_child)
     cfg = config(args.quick)
@@ -1075,15 +1096,20 @@ def main(argv=None):
     )
 
     # ------------------------------------------------------------------ reference
-    ref, ref_failures, ref_compile_s, ref_s = reference(
-        s, cfg["ref_rtol"], cfg["ref_max_steps"], cfg["ref_history"]
+    if "a" not in run:
+        cfg.update(ref_check_rtol=None, a_rtols=[])
+    ref, ref_failures, ref_compile_s, ref_s = (
+        reference(s, cfg["ref_rtol"], cfg["ref_max_steps"], cfg["ref_history"])
+        if "a" in run
+        else ({k: np.full(n, np.nan) for k in FIELDS}, {}, 0.0, 0.0)
     )
     valid = np.array([i not in ref_failures for i in range(n)])
-    print(
-        f"reference: oblique_impact at rtol {cfg['ref_rtol']:.0e}, max_steps {cfg['ref_max_steps']}, "
-        f"one scenario per call: compile {ref_compile_s:.1f} s, run {ref_s:.1f} s; "
-        f"{int(valid.sum())}/{n} usable" + (f"; failed: {ref_failures}" if ref_failures else "")
-    )
+    if "a" in run:
+        print(
+            f"reference: oblique_impact at rtol {cfg['ref_rtol']:.0e}, max_steps {cfg['ref_max_steps']}, "
+            f"one scenario per call: compile {ref_compile_s:.1f} s, run {ref_s:.1f} s; "
+            f"{int(valid.sum())}/{n} usable" + (f"; failed: {ref_failures}" if ref_failures else "")
+        )
     ref_check = {}
     if cfg["ref_check_rtol"]:
         check, check_failures, check_compile_s, check_s = reference(
@@ -1124,9 +1150,13 @@ def main(argv=None):
     else:
         print(f"observed convergence: too few rows ({order['n_points']}) to fit")
 
-    b_rows, loop = section_throughput(cfg, args.seed, s)
-    c_rows = section_gradient(cfg, args.seed)
-    d_scenarios, d_sections = section_stability(cfg)
+    b_rows, loop = (
+        section_throughput(cfg, args.seed, s)
+        if "b" in run
+        else ({"oblique": [], "normal_ode": []}, None)
+    )
+    c_rows = section_gradient(cfg, args.seed) if "c" in run else []
+    d_scenarios, d_sections = section_stability(cfg) if "d" in run else ({}, [])
 
     # ------------------------------------------------------------------ verdicts
     def at_largest(model):
@@ -1143,7 +1173,11 @@ def main(argv=None):
         oblique=ob,
         normal_ode=no,
         ratio=ratio,
-        verdict="PASS" if ratio is not None and ratio <= TARGET_THROUGHPUT_RATIO else "FAIL",
+        verdict="NOT RUN"
+        if "b" not in run
+        else "PASS"
+        if ratio is not None and ratio <= TARGET_THROUGHPUT_RATIO
+        else "FAIL",
     )
     finished = [
         (sec["rtol"], r)
@@ -1161,7 +1195,7 @@ def main(argv=None):
         finished=len(finished),
         failing=n_energy,
         worst=worst_energy,
-        verdict="PASS" if finished and n_energy == 0 else "FAIL",
+        verdict="NOT RUN" if "d" not in run else "PASS" if finished and n_energy == 0 else "FAIL",
     )
 
     # ------------------------------------------------------------------ surprises
@@ -1248,8 +1282,9 @@ def main(argv=None):
         surprises=surprises,
     )
     if not args.no_plots:
-        data["plots"] = [str(p) for p in plots(args.out, data, cfg)]
-    path = args.out / "oblique_impact.json"
+        data["plots"] = [str(p) for p in plots(args.out, data, cfg, run)]
+    suffix = "" if run == set("abcd") else "_" + "".join(sorted(run))
+    path = args.out / f"oblique_impact{suffix}.json"
     path.write_text(json.dumps(jsonable(data), indent=1))
 
     # ------------------------------------------------------------------ summary
