@@ -34,8 +34,10 @@ Phases.
 1. Crushing (accelerative, in time T): the vehicle crushes at constant force phi; its
    normal velocity U falls at phi/mu. At T = 0, V0 = 0 and S' = g/V0 is 0/0; its limit
    is the antisymmetric mode S1' = -S2' = -3/2 a V_H / (a + 1/2 + phi/S*) with
-   a = V0'(0) (linearise the second and third lines about S1 = S2 = S*), used exactly at
-   V0 = 0. The phase ends where the vehicle stops crushing: U = V0 + theta V_H.
+   a = V0'(0) (linearise the second and third lines about S1 = S2 = S*). The steps start
+   at T = 1e-2 rtol^1/2 T_scale from this expansion (`_series_start`): from T = 0 itself
+   no explicit step is stable when phi is near 1. The phase ends where the vehicle stops
+   crushing: U = V0 + theta V_H.
 2. Contact (decelerative): the vehicle is rigid and follows the contact point, so
    g = -mu d/dT (V0 + theta V_H), which with the first line gives (3.3.22)'s form
 
@@ -383,24 +385,56 @@ def _sliding_friction(vh, p: _Params):
     return jnp.where(vh > 0.0, p.friction, 0.0)
 
 
+def _series_start(t, vn, vh, p: _Params) -> _Crushing:
+    """The crushing phase's state at a small time t, from its expansion about T = 0.
+
+    At T = 0, V0 = 0 and S' = g_i/V0 is 0/0, and for force ratios near 1 the linearised
+    hinge equations are stiff in proportion to 1/V0'(0): no explicit step from T = 0 is
+    stable. To first order, V0 = a T with a = V0'(0), and the hinges move in the
+    antisymmetric mode S1 - S* = S* - S2 = sigma T, sigma = -3/2 a V_H / (a + 1/2 +
+    phi/S*) (linearise the second and third lines of (3.3.16) about S1 = S2 = S*; the
+    symmetric mode has no regular first-order part); the integrals follow to second order,
+    so that the energy balance closes to O(t^3). The neglected terms are O(t^2), relative
+    O(t / T*)."""
+    a = _acceleration(p.s_star, p.s_star, p.phi)
+    sigma = -1.5 * a * vh / (a + 0.5 + p.phi / p.s_star)
+    vehicle = 0.0 if p.moving_load else 1.0
+    deceleration = vehicle * p.friction * p.phi / p.mu
+    braking = deceleration > 0.0
+    stop = jnp.where(braking, vh / jnp.where(braking, deceleration, 1.0), jnp.inf)
+    slide = jnp.minimum(t, stop)
+    slid = vh * slide - 0.5 * deceleration * slide**2
+    contact_displacement = 0.5 * a * t**2
+    return _Crushing(
+        v0=a * t,
+        s1=p.s_star + sigma * t,
+        s2=p.s_star - sigma * t,
+        position=slid,
+        rotation=0.5 * a * t**2 / p.s_star,
+        vehicle_normal=vn - vehicle * p.phi * t / p.mu,
+        vehicle_tangential=vh - deceleration * slide,
+        crush=vehicle * (vn * t - 0.5 * p.phi * t**2 / p.mu - contact_displacement),
+        contact_displacement=contact_displacement,
+        backing_work=0.25 * a * p.s_star * t**2,
+        hinge_work=0.25 * a * t**2 / p.s_star,
+        friction_work=p.friction * p.phi * slid,
+        slope_work=jnp.zeros_like(t),
+    )
+
+
 def _crushing_field(t, y: _Crushing, p: _Params, past: _Past) -> _Crushing:
     vh = jnp.maximum(y.vehicle_tangential, 0.0)
     force = p.phi
-    dv0 = _acceleration(y.s1, y.s2, force)
     g1, g2 = _hinge_terms(y.s1, y.s2, force)
-    moving = y.v0 > 0.0
-    safe_v0 = jnp.where(moving, y.v0, 1.0)
-    # At V0 = 0 (T = 0 only) the 0/0 limit: the antisymmetric mode of the linearisation.
-    start = -1.5 * dv0 * vh / (dv0 + 0.5 + p.phi / p.s_star)
     psi, _ = _slope_memory(past, y.position)
     theta = psi - y.rotation
     contact_velocity = y.v0 + theta * vh
     backing, hinge = _beam_powers(y.v0, y.s1, y.s2)
     vehicle = 0.0 if p.moving_load else 1.0
     return _Crushing(
-        v0=dv0,
-        s1=jnp.where(moving, g1 / safe_v0 - 1.5 * vh, start),
-        s2=jnp.where(moving, g2 / safe_v0 + 1.5 * vh, -start),
+        v0=_acceleration(y.s1, y.s2, force),
+        s1=g1 / y.v0 - 1.5 * vh,
+        s2=g2 / y.v0 + 1.5 * vh,
         position=vh,
         rotation=y.v0 / y.s1,
         vehicle_normal=-vehicle * force / p.mu,
@@ -716,21 +750,10 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     acceleration = (phi - s_star) / s_star
     time_scale = t_end if moving_load else 1.0 / (acceleration + phi / mu)
 
-    crushing = _Crushing(
-        v0=zero,
-        s1=s_star,
-        s2=s_star,
-        position=zero,
-        rotation=zero,
-        vehicle_normal=zero + vn,
-        vehicle_tangential=zero + vh,
-        crush=zero,
-        contact_displacement=zero,
-        backing_work=zero,
-        hinge_work=zero,
-        friction_work=zero,
-        slope_work=zero,
-    )
+    # The step loop starts where the expansion's error, relative O((t / T*)^2), is far
+    # below rtol; the solution does not depend on where, so neither does its derivative.
+    t_start = jax.lax.stop_gradient(1e-2 * jnp.sqrt(rtol) * time_scale)
+    crushing = _series_start(t_start, zero + vn, zero + vh, p)
     if moving_load:
         event = lambda t, y, f, p, past: t_end - t
     else:
@@ -738,14 +761,14 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     first = solve_recorded(
         _crushing_field,
         crushing,
-        zero,
+        t_start,
         p,
         recording,
         record=_record_crushing,
         event=event,
         rtol=rtol,
         atol=atol,
-        h0=1e-2 * time_scale * rtol**0.2,
+        h0=t_start,
         max_step=_lookup_bound(lambda y: y.vehicle_tangential),
         max_steps=max_steps,
         view=_past,
