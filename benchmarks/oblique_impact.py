@@ -40,6 +40,7 @@ import jax
 jax.config.update("jax_enable_x64", True)
 
 import argparse
+import gc
 import json
 import logging
 import math
@@ -253,6 +254,15 @@ def executable(kind, args, rtol, max_steps=1024, history=False):
     return (*_EXE[key], False)
 
 
+def forget_executables():
+    """Drop every compiled executable. XLA's CPU code stays mapped while its executable
+    lives, and a full run's few dozen executables passed the kernel's limit of 65530
+    mappings: LLVM then failed to allocate and the run crashed (2026-11-23, in (b))."""
+    _EXE.clear()
+    jax.clear_caches()
+    gc.collect()
+
+
 def run_timed(compiled, args, *, warm_up=True, max_reps=20, min_total=0.2):
     """(output, best_s): one warm-up call, then the best of >= 3 timed calls (of one call when
     a call takes over 1 s)."""
@@ -436,6 +446,7 @@ def section_error_vs_time(cfg, s, ref, valid):
                 row["failing_alone"] = failing_alone(compiled[0], s, n)
         rows.append(row)
         print_row_a(row)
+        forget_executables()
     return rows
 
 
@@ -541,6 +552,7 @@ def section_throughput(cfg, seed, scenario_set):
             "  (diagnostic: a Python loop of batch-1 calls)",
             flush=True,
         )
+    forget_executables()
     return rows, loop
 
 
@@ -825,6 +837,7 @@ def section_stability(cfg):
         section["counts"] = counts(results)
         sections.append(section)
         print_stability(cfg, s, section)
+        forget_executables()
     return s, sections
 
 
@@ -1130,6 +1143,7 @@ def main(argv=None):
             + ", ".join(f"{k} {v:.1e}" for k, v in ref_check["error_by_field"].items())
             + ")"
         )
+    forget_executables()
     reversed_ref = [i for i in range(n) if valid[i] and ref["exit_tangential_speed"][i] < 0.0]
 
     # ------------------------------------------------------------------ sections
