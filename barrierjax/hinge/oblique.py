@@ -754,6 +754,14 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     # below rtol; the solution does not depend on where, so neither does its derivative.
     t_start = jax.lax.stop_gradient(1e-2 * jnp.sqrt(rtol) * time_scale)
     crushing = _series_start(t_start, zero + vn, zero + vh, p)
+    # The histories and the hinge trace start at T = 0 itself, with the expansion's rates.
+    at_zero = functools.partial(_series_start, vn=zero + vn, vh=zero + vh, p=p)
+    rate_at_zero, acceleration_at_zero = jax.jvp(
+        lambda t: jax.jvp(at_zero, (t,), (jnp.ones_like(t),)), (zero,), (jnp.ones_like(zero),)
+    )[1]
+    recording = recording.append(
+        _record_crushing(zero, at_zero(zero), rate_at_zero, acceleration_at_zero, p)
+    )
     if moving_load:
         event = lambda t, y, f, p, past: t_end - t
     else:
