@@ -200,8 +200,9 @@ _WINDOW = 8
 
 class _Past(eqx.Module):
     """What a step reads of the right hinge's recorded trace: `_WINDOW` consecutive
-    samples (H, Phi, dPhi/dH, d2Phi/dH2) from `start`, the segment's bounds (`_Params.segment`), the
-    trace's first position S* and `reach`, the furthest position the window covers."""
+    samples (H, Phi, dPhi/dH, d2Phi/dH2) from `start`, the segment's bounds
+    (`_Params.segment`), the trace's first position S* and `reach`, the furthest position
+    the window covers."""
 
     hinge: Float[Array, " window"]
     rotation: Float[Array, " window"]
@@ -747,8 +748,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     p = _Params(mu, phi, friction, s_star, everything, moving_load=moving_load)
     recording = _empty_recording(capacity, dtype, history)
     atol = 1e-3 * rtol
-    acceleration = (phi - s_star) / s_star
-    time_scale = t_end if moving_load else 1.0 / (acceleration + phi / mu)
+    time_scale = t_end if moving_load else 1.0 / (_acceleration(s_star, s_star, phi) + phi / mu)
 
     # The step loop starts where the expansion's error, relative O((t / T*)^2), is far
     # below rtol; the solution does not depend on where, so neither does its derivative.
