@@ -50,26 +50,45 @@ _BRACKET_TOLERANCE = 1e-9
 
 
 class Recording(eqx.Module):
-    """`samples` (leaves with a leading axis of `capacity`) of which the first `count` are
-    filled; the rest repeat the last filled sample or hold the initial fill."""
+    """Samples of the named quantities, one row of `buffer` each, of which the first
+    `count` are filled. A row holds every quantity, so that appending a sample or reading
+    a few consecutive ones is a single memory access: under `vmap` each is one gather or
+    scatter, and those, not the arithmetic, dominate a step's cost on a CPU."""
 
-    samples: dict[str, Float[Array, " capacity"]]
+    buffer: Float[Array, "capacity quantities"]
     count: Int[Array, ""]
+    names: tuple[str, ...] = eqx.field(static=True)
+
+    @classmethod
+    def empty(cls, names: tuple[str, ...], capacity: int, dtype, fill: dict | None = None):
+        """`capacity` rows holding 0, or `fill[name]` for the quantities named there."""
+        fill = fill or {}
+        row = jnp.asarray([fill.get(name, 0.0) for name in names], dtype)
+        return cls(jnp.tile(row, (capacity, 1)), jnp.zeros((), jnp.int32), tuple(names))
+
+    @property
+    def samples(self) -> dict[str, Float[Array, " capacity"]]:
+        return {name: self.buffer[:, k] for k, name in enumerate(self.names)}
+
+    def rows(self, start, size: int, names: tuple[str, ...]) -> dict:
+        """Rows `start` to `start + size` of the quantities `names`, which must be
+        consecutive in `names` order: one read."""
+        first = self.names.index(names[0])
+        if self.names[first : first + len(names)] != tuple(names):
+            raise ValueError(f"{names} are not consecutive in the recording's {self.names}")
+        # (Indexing, not lax.dynamic_slice: inside a loop the buffer is equinox's `_Buffer`.)
+        start = jnp.asarray(start)
+        block = self.buffer[start + jnp.arange(size, dtype=start.dtype), first : first + len(names)]
+        return {name: block[:, k] for k, name in enumerate(names)}
 
     def append(self, sample: dict, when=True):
-        """Record `sample` (the entries this recording keeps) if `when`. The slot is written
-        either way (with its own content when not), so that under `vmap` a step costs one
-        sample, not a copy of the buffer."""
-        samples = {
-            name: buf.at[self.count].set(jnp.where(when, sample[name], buf[self.count]))
-            for name, buf in self.samples.items()
-        }
-        count = jnp.minimum(self.count + jnp.where(when, 1, 0), _capacity(samples) - 1)
-        return Recording(samples, count)
-
-
-def _capacity(samples):
-    return jax.tree.leaves(samples)[0].shape[0]
+        """Record `sample` (it must hold every quantity this recording keeps) if `when`.
+        The first free row is written either way and filled only when `when`: under `vmap`
+        a conditional write would read the row back first, a second memory access."""
+        row = jnp.stack([jnp.asarray(sample[name], self.buffer.dtype) for name in self.names])
+        buffer = self.buffer.at[self.count].set(row)
+        count = jnp.minimum(self.count + jnp.where(when, 1, 0), self.buffer.shape[0] - 1)
+        return Recording(buffer, count, self.names)
 
 
 def _combine(y, h, weights, ks):
@@ -207,7 +226,7 @@ def solve_recorded(
         ended_at_start,
     )
     t, y, f, h, recording, steps, crossed = eqxi.while_loop(
-        cond, body, start, kind="lax", buffers=lambda carry: carry[4].samples
+        cond, body, start, kind="lax", buffers=lambda carry: carry[4].buffer
     )
 
     # The crossing lies within (t, t + h]: Illinois regula falsi on the step length, on

@@ -176,18 +176,18 @@ def _beam_kinetic_energy(v0, s1, s2):
     return v0**2 * (s1 + s2) / 6.0
 
 
-def _interval(sorted_samples, x, first, last):
-    """The i in [first, max(last - 1, first)] with sorted_samples[i] <= x <
-    sorted_samples[i + 1], clamped to the ends: bisection within the segment's samples,
-    reading one sample per halving."""
+def _interval(recording: Recording, x, first, last):
+    """The i in [first, max(last - 1, first)] with hinge[i] <= x < hinge[i + 1], clamped
+    to the ends: bisection within the segment's samples, reading one sample per halving."""
+    column = recording.names.index("hinge")
 
     def halve(_, bounds):
         lo, hi = bounds
         mid = (lo + hi) // 2
-        right = sorted_samples[mid] <= x
+        right = recording.buffer[mid, column] <= x
         return jnp.where(right, mid, lo), jnp.where(right, hi, mid)
 
-    halvings = max(1, math.ceil(math.log2(sorted_samples.shape[0])))
+    halvings = max(1, math.ceil(math.log2(recording.buffer.shape[0])))
     lo, _ = jax.lax.fori_loop(0, halvings, halve, (first, jnp.maximum(last, first)))
     return lo
 
@@ -200,9 +200,9 @@ _WINDOW = 8
 
 class _Past(eqx.Module):
     """What a step reads of the right hinge's recorded trace: `_WINDOW` consecutive
-    samples (H, Phi, dPhi/dH, d2Phi/dH2) from `start`, the segment's bounds
-    (`_Params.segment`), the trace's first position S* and `reach`, the furthest position
-    the window covers."""
+    samples (H, Phi, dPhi/dH, d2Phi/dH2) from `start` (H = +inf past the last recorded
+    one), the segment's bounds (`_Params.segment`) and `reach`, the furthest position the
+    window covers."""
 
     hinge: Float[Array, " window"]
     rotation: Float[Array, " window"]
@@ -211,27 +211,21 @@ class _Past(eqx.Module):
     start: Int[Array, ""]
     first: Int[Array, ""]
     last: Int[Array, ""]
-    first_hinge: Scalar
     reach: Scalar
 
 
 def _past(t, y, p, recording: Recording) -> _Past:
     """The window of the trace from the interval holding the load, found once per step."""
-    h = recording.samples["hinge"]
     first, last = p.segment
     recorded = jnp.maximum(recording.count - 1, 0)
     last = jnp.minimum(last, recorded)
-    start = jnp.minimum(_interval(h, y.position, first, last), h.shape[0] - _WINDOW)
-    indices = start + jnp.arange(_WINDOW, dtype=start.dtype)
-    window = {name: recording.samples[name][indices] for name in _MEMORY}
-    return _Past(
-        **window,
-        start=start,
-        first=first,
-        last=last,
-        first_hinge=h[0],
-        reach=h[jnp.minimum(start + _WINDOW - 1, recorded)],
-    )
+    capacity = recording.buffer.shape[0]
+    start = jnp.minimum(_interval(recording, y.position, first, last), capacity - _WINDOW)
+    window = recording.rows(start, _WINDOW, _MEMORY)
+    filled = start + jnp.arange(_WINDOW, dtype=start.dtype) <= recorded
+    hinge = jnp.where(filled, window.pop("hinge"), jnp.inf)
+    reach = jnp.max(jnp.where(filled, hinge, -jnp.inf))
+    return _Past(hinge=hinge, **window, start=start, first=first, last=last, reach=reach)
 
 
 def _quintic_hermite(u, width, left, right):
@@ -285,10 +279,10 @@ def _cubic_hermite(u, width, left, right):
     return value, slope
 
 
-def _slope_memory(past: _Past, x):
+def _slope_memory(past: _Past, x, s_star):
     """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by quintic Hermite
     interpolation of the recorded (H, Phi, dPhi/dH, d2Phi/dH2); zero ahead of the initial
-    hinge.
+    hinge, x < S*.
 
     The interpolant is C2 with error O(step^6): the force reads Psi', and a lower-order or
     less smooth interpolant would put a kink into the vector field at every recorded
@@ -326,7 +320,7 @@ def _slope_memory(past: _Past, x):
     phi_i, slope_i, _ = left
     psi = jnp.where(interior, psi, phi_i + slope_i * (x - h_i))
     dpsi = jnp.where(interior, dpsi, slope_i)
-    ahead = x < past.first_hinge
+    ahead = x < s_star
     return jnp.where(ahead, 0.0, psi), jnp.where(ahead, 0.0, dpsi)
 
 
@@ -427,7 +421,7 @@ def _crushing_field(t, y: _Crushing, p: _Params, past: _Past) -> _Crushing:
     vh = jnp.maximum(y.vehicle_tangential, 0.0)
     force = p.phi
     g1, g2 = _hinge_terms(y.s1, y.s2, force)
-    psi, _ = _slope_memory(past, y.position)
+    psi, _ = _slope_memory(past, y.position, p.s_star)
     theta = psi - y.rotation
     contact_velocity = y.v0 + theta * vh
     backing, hinge = _beam_powers(y.v0, y.s1, y.s2)
@@ -453,7 +447,7 @@ def _contact_force(y: _Sliding, p: _Params, past: _Past):
     """(force ratio, slope under the load): (3.3.20)-(3.3.22) solved for the force."""
     v0 = jnp.exp(y.log_v0)
     vh = jnp.maximum(y.vehicle_tangential, 0.0)
-    psi, curvature = _slope_memory(past, y.position)
+    psi, curvature = _slope_memory(past, y.position, p.s_star)
     theta = psi - y.rotation
     s1, s2 = y.s1, y.s2
     numerator = (
@@ -610,8 +604,7 @@ _HISTORY = (
 def _empty_recording(capacity, dtype, history):
     names = _MEMORY + _MOTION + (_HISTORY if history else ())
     # Unrecorded hinge positions are +inf, so that a sorted search never lands on them.
-    samples = {n: jnp.full((capacity,), jnp.inf if n == "hinge" else 0.0, dtype) for n in names}
-    return Recording(samples, jnp.zeros((), jnp.int32))
+    return Recording.empty(names, capacity, dtype, fill={"hinge": jnp.inf})
 
 
 # --------------------------------------------------------------------------------------
@@ -675,7 +668,7 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
     """
     recording = first.recording
     int_ = recording.count.dtype
-    first_hinge = recording.samples["hinge"][0]  # S*, recorded at T = 0
+    first_hinge = p.s_star  # where the trace starts, at T = 0
     # The last sample of the crushing phase is the left limit at H(T*).
     h_t_star, left = start.position + start.s1, recording.count - 1
     no_s_star = _Breakpoints(
@@ -719,7 +712,7 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
         segment,
         carry,
         kind="lax",
-        buffers=lambda c: c[0].recording.samples,
+        buffers=lambda c: c[0].recording.buffer,
     )
     end = eqx.tree_at(lambda e: e.complete, end, end.complete & (steps < max_steps))
     return require_complete(end, "contact phase"), p
@@ -896,18 +889,22 @@ def _displacement_field(samples, count, x):
     return jnp.concatenate([jnp.zeros_like(v[:1]), jnp.cumsum(increments, axis=0)])
 
 
-def _final_displacement(samples, count, x):
+def _final_displacement(recording: Recording, x):
     """W(x) at the last recorded time, as `_displacement_field` but over the recorded
-    steps alone (a few dozen, where the buffer holds thousands)."""
+    steps alone (a few dozen, where the buffer holds thousands), one row read each."""
+
+    def motion(k):
+        row = {name: value[0] for name, value in recording.rows(k, 1, _MOTION).items()}
+        return row.pop("time"), _velocity_field(**row, x=x)
 
     def step(k, carry):
-        w, v = carry
-        v_next = _velocity_field(*_motion(samples, k + 1), x)
-        dt = samples["time"][k + 1] - samples["time"][k]
-        return w + 0.5 * (v + v_next) * dt, v_next
+        w, t, v = carry
+        t_next, v_next = motion(k + 1)
+        return w + 0.5 * (v + v_next) * (t_next - t), t_next, v_next
 
-    v_first = _velocity_field(*_motion(samples, 0), x)
-    w, _ = jax.lax.fori_loop(0, count - 1, step, (jnp.zeros_like(v_first), v_first))
+    t_first, v_first = motion(0)
+    carry = (jnp.zeros_like(v_first), t_first, v_first)
+    w, _, _ = jax.lax.fori_loop(0, recording.count - 1, step, carry)
     return w
 
 
@@ -919,11 +916,12 @@ def _padded(samples, count):
     return jax.tree.map(lambda a: a[index], samples)
 
 
-def _grid(samples, n_x):
-    """`n_x` points spanning every plastic zone of the motion."""
+def _grid(samples, count, n_x):
+    """`n_x` points spanning every plastic zone of the first `count` samples."""
+    filled = jnp.arange(samples["position"].shape[0], dtype=count.dtype) < count
     return jnp.linspace(
-        jnp.min(samples["position"] - samples["s2"]),
-        jnp.max(samples["position"] + samples["s1"]),
+        jnp.min(jnp.where(filled, samples["position"] - samples["s2"], jnp.inf)),
+        jnp.max(jnp.where(filled, samples["position"] + samples["s1"], -jnp.inf)),
         n_x,
     )
 
@@ -974,16 +972,16 @@ def _oblique(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x):
     # (Friction may have stopped the slide within the last step: no negative overshoot.)
     exit_tangential = jnp.maximum(second.y.vehicle_tangential, 0.0)
     recording = third.recording
-    samples = _padded(recording.samples, recording.count)
-    x = _grid(samples, n_x)
+    x = _grid(recording.samples, recording.count, n_x)
     hist = None
     if history:
+        samples = _padded(recording.samples, recording.count)
         displacement = _displacement_field(samples, recording.count, x)
         final_displacement = displacement[-1]
         samples["crush"] = jnp.where(samples["phase"] > 1.0, damage, samples["crush"])
         hist = _history(samples, recording.count, p, x, displacement)
     else:
-        final_displacement = _final_displacement(samples, recording.count, x)
+        final_displacement = _final_displacement(recording, x)
     max_deflection = jnp.maximum(jnp.max(final_displacement), w_final)
     return ObliqueImpact(
         t_star=first.t,
@@ -1108,7 +1106,7 @@ def _moving_load(phi, vh, t_end, rtol, *, max_steps):
         )
         recording = first.recording
         samples = _padded(recording.samples, recording.count)
-        x = _grid(samples, _N_X)
+        x = _grid(samples, recording.count, _N_X)
         displacement = _displacement_field(samples, recording.count, x)
         return MovingLoad(
             s1=first.y.s1,
