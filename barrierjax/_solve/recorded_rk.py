@@ -154,14 +154,15 @@ def solve_recorded(
     h0,
     max_step: Callable,
     max_steps: int,
-    view: Callable = lambda t, y, args, recording: recording,
+    view: Callable = lambda t, y, args, recording, previous: recording,
     bracket_iterations: int = 64,
 ) -> PhaseEnd:
     """Integrate `field(t, y, args, past)` from `t0` until `event(t, y, f, args, past)`,
     positive at the start, falls to zero.
 
-    `past = view(t, y, args, recording)` is taken at the start of each step and serves
-    every stage of it (by default the whole recording). `record(t, y, f, rate, args)` gives
+    `past = view(t, y, args, recording, previous)` is taken at the start of each step and
+    serves every stage of it (by default the whole recording); `previous` is the last
+    step's, or None at the start, so that a view can be found from the one before. `record(t, y, f, rate, args)` gives
     the sample appended to `recording` after each accepted step (and at the start and the
     end), with `f` the field there and `rate` its derivative along the solution, df/dt;
     `max_step(t, y, f, args, past)` bounds the step, for example so that the stages never
@@ -178,7 +179,7 @@ def solve_recorded(
         # Only the entries `record` reads survive dead-code elimination.
         return jax.jvp(lambda t, y: field(t, y, args, past), (t, y), (jnp.ones_like(t), f))[1]
 
-    past = view(t0, y0, args, recording)
+    past = view(t0, y0, args, recording, None)
     f0 = field(t0, y0, args, past)
     recording = recording.append(record(t0, y0, f0, rate(t0, y0, f0, past), args))
     dtype = jnp.result_type(t0)
@@ -189,9 +190,9 @@ def solve_recorded(
         return ~crossed & (steps < max_steps)
 
     def body(carry):
-        t, y, f, h, rec, steps, _ = carry
+        t, y, f, h, rec, previous, steps, _ = carry
         # Step lengths are a discretisation choice: no derivative flows through them.
-        past = view(t, y, args, rec)
+        past = view(t, y, args, rec, previous)
         h = jax.lax.stop_gradient(jnp.minimum(h, max_step(t, y, f, args, past)))
         y1, error, f1 = _step(field, t, y, f, h, args, past)
         ratio = _error_ratio(y, y1, error, rtol, atol)
@@ -212,6 +213,7 @@ def solve_recorded(
             keep(f1, f),
             h_next.astype(dtype),
             new_rec,
+            past,
             steps + 1,
             crossed,
         )
@@ -222,10 +224,11 @@ def solve_recorded(
         f0,
         jnp.asarray(h0, dtype),
         recording,
+        past,
         jnp.zeros((), jnp.int32),
         ended_at_start,
     )
-    t, y, f, h, recording, steps, crossed = eqxi.while_loop(
+    t, y, f, h, recording, previous, steps, crossed = eqxi.while_loop(
         cond, body, start, kind="lax", buffers=lambda carry: carry[4].buffer
     )
 
@@ -237,7 +240,7 @@ def solve_recorded(
         y1, _, f1 = _step(field, t, y, f, length, args, past)
         return event(t + length, y1, f1, args, past)
 
-    past = view(t, y, args, recording)
+    past = view(t, y, args, recording, previous)
     primal = jax.lax.stop_gradient((t, y, f, args, past))
     primal_event = lambda length: event_after(length, *primal)
 

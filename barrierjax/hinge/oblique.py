@@ -214,13 +214,21 @@ class _Past(eqx.Module):
     reach: Scalar
 
 
-def _past(t, y, p, recording: Recording) -> _Past:
-    """The window of the trace from the interval holding the load, found once per step."""
+def _past(t, y, p, recording: Recording, previous: _Past | None = None) -> _Past:
+    """The window of the trace from the interval holding the load, found once per step:
+    by bisection, or from `previous`, the last step's window. The load only advances,
+    and each step keeps it short of its window's reach (`_lookup_bound`), so the interval
+    holding it now lies in the last window."""
     first, last = p.segment
     recorded = jnp.maximum(recording.count - 1, 0)
     last = jnp.minimum(last, recorded)
-    capacity = recording.buffer.shape[0]
-    start = jnp.minimum(_interval(recording, y.position, first, last), capacity - _WINDOW)
+    if previous is None:
+        interval = _interval(recording, y.position, first, last)
+    else:
+        below = jnp.sum(previous.hinge <= y.position).astype(previous.start.dtype)
+        interval = previous.start + jnp.maximum(below - 1, 0)
+        interval = jnp.clip(interval, first, jnp.maximum(last - 1, first))
+    start = jnp.minimum(interval, recording.buffer.shape[0] - _WINDOW)
     window = recording.rows(start, _WINDOW, _MEMORY)
     filled = start + jnp.arange(_WINDOW, dtype=start.dtype) <= recorded
     hinge = jnp.where(filled, window.pop("hinge"), jnp.inf)
@@ -682,13 +690,13 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
     )
 
     def segment(carry):
-        end, p, pending, behind, steps, _ = carry
+        end, p, pending, behind, _ = carry
         position, left, right = pending.head()
         p = eqx.tree_at(lambda p: p.segment, p, (behind, left))
         event = lambda s, y, f, p, past: jnp.minimum(
             contact_event(s, y, f, p, past), position - y.position
         )
-        end = sliding(True, end.y, end.recording, p, event, max_steps - steps)
+        end = sliding(True, end.y, end.recording, p, event)
         crossed = position - end.y.position < contact_event(
             0.0, end.y, end.derivative, p, _past(0.0, end.y, p, end.recording)
         )
@@ -699,22 +707,21 @@ def _contact_segments(sliding, start, first, p: _Params, contact_event, max_step
             p,
             keep(created, pending),
             jnp.where(crossed, right, behind),
-            steps + end.steps + 2,
             crossed,
         )
 
     # (`derivative` is a placeholder of the right structure: no segment reads it.)
     initial = PhaseEnd(first.t, start, start, recording, first.steps, first.complete)
-    steps = jnp.zeros((), jnp.int32)
-    carry = (initial, p, pending, jnp.zeros((), int_), steps, jnp.asarray(True))
-    end, p, _, _, steps, _ = eqxi.while_loop(
-        lambda c: c[-1] & (c[-2] < max_steps),
+    carry = (initial, p, pending, jnp.zeros((), int_), jnp.asarray(True))
+    end, p, _, _, crossed = eqxi.while_loop(
+        lambda c: c[-1] & (c[0].recording.count < max_steps),
         segment,
         carry,
         kind="lax",
         buffers=lambda c: c[0].recording.buffer,
     )
-    end = eqx.tree_at(lambda e: e.complete, end, end.complete & (steps < max_steps))
+    # (Still on a breakpoint: the budget ran out between segments.)
+    end = eqx.tree_at(lambda e: e.complete, end, end.complete & ~crossed)
     return require_complete(end, "contact phase"), p
 
 
@@ -736,7 +743,9 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     root = jnp.sqrt(phi**2 + 3.0)
     s_star = 3.0 / (root + phi)
     moving_load = t_end is not None
-    capacity = 3 * max_steps + 8
+    # One row per accepted step, and the start and end of each phase and segment: a phase
+    # may attempt max_steps - count steps, and fills at most two rows more than it accepts.
+    capacity = max_steps + 8
     everything = (jnp.zeros((), jnp.int32), jnp.asarray(capacity, jnp.int32))
     p = _Params(mu, phi, friction, s_star, everything, moving_load=moving_load)
     recording = _empty_recording(capacity, dtype, history)
@@ -771,7 +780,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         atol=atol,
         h0=t_start,
         max_step=_lookup_bound(lambda y: y.vehicle_tangential),
-        max_steps=max_steps,
+        max_steps=max_steps - recording.count,
         view=_past,
     )
     first = require_complete(first, "moving load" if moving_load else "crushing phase")
@@ -807,7 +816,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         # After separation the load stands still and the memory is not read.
         return jnp.minimum(bound, lookup_bound(s, y, f, p, past)) if in_contact else bound
 
-    def sliding(in_contact, start, recording, p, event, budget):
+    def sliding(in_contact, start, recording, p, event):
         field = _sliding_field(in_contact)
         rate = field(zero, start, p, _past(zero, start, p, recording)).log_v0
         return solve_recorded(
@@ -822,7 +831,7 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
             atol=atol,
             h0=1e-2 * rtol**0.2 / jnp.abs(rate),
             max_step=functools.partial(max_step, in_contact),
-            max_steps=budget,
+            max_steps=max_steps - recording.count,
             view=_past,
         )
 
@@ -850,7 +859,6 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         second.recording,
         p,
         lambda s, y, f, p, past: y.log_v0 - free_rest,
-        max_steps,
     )
     third = require_complete(third, "free phase")
     return p, first, second, (third, separated, theta_end)
@@ -1040,7 +1048,8 @@ def oblique_impact(
     - `friction`: Coulomb coefficient between vehicle and barrier, non-negative.
     - `rtol`: relative tolerance of the step loop (absolute: 1e-3 rtol).
     - `history`: also return the recorded steps and the displacement field.
-    - `max_steps`: step budget per phase (also the size of the recorded history).
+    - `max_steps`: step budget of the whole run, all phases together (also the size of
+      the recorded history).
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap`.
