@@ -162,11 +162,11 @@ def solve_recorded(
 
     `past = view(t, y, args, recording, previous)` is taken at the start of each step and
     serves every stage of it (by default the whole recording); `previous` is the last
-    step's, or None at the start, so that a view can be found from the one before. `record(t, y, f, rate, args)` gives
-    the sample appended to `recording` after each accepted step (and at the start and the
-    end), with `f` the field there and `rate` its derivative along the solution, df/dt;
-    `max_step(t, y, f, args, past)` bounds the step, for example so that the stages never
-    read past what `past` holds. An event
+    step's, or None at the start, so that a view can be found from the one before.
+    `record(t, y, f, rate, args)` gives the sample appended to `recording` after each
+    accepted step (and at the start and the end), with `f` the field there and `rate` its
+    derivative along the solution, df/dt; `max_step(t, y, f, args, past)` bounds the step,
+    for example so that the stages never read past what `past` holds. An event
     that is not positive at the start ends the phase there, after no step. A spent step
     budget is flagged (`complete`), not raised: see `require_complete`.
 
