@@ -60,11 +60,11 @@ class Recording(eqx.Module):
     names: tuple[str, ...] = eqx.field(static=True)
 
     @classmethod
-    def empty(cls, names: tuple[str, ...], capacity: int, dtype, fill: dict | None = None):
-        """`capacity` rows holding 0, or `fill[name]` for the quantities named there."""
-        fill = fill or {}
-        row = jnp.asarray([fill.get(name, 0.0) for name in names], dtype)
-        return cls(jnp.tile(row, (capacity, 1)), jnp.zeros((), jnp.int32), tuple(names))
+    def empty(cls, names: tuple[str, ...], capacity: int, dtype):
+        """`capacity` rows of zeros. Readers mask the rows past `count`: the first of them
+        may hold a rejected step's sample (`append`)."""
+        buffer = jnp.zeros((capacity, len(names)), dtype)
+        return cls(buffer, jnp.zeros((), jnp.int32), tuple(names))
 
     @property
     def samples(self) -> dict[str, Float[Array, " capacity"]]:

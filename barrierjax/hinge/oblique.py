@@ -611,8 +611,7 @@ _HISTORY = (
 
 def _empty_recording(capacity, dtype, history):
     names = _MEMORY + _MOTION + (_HISTORY if history else ())
-    # Unrecorded hinge positions are +inf, so that a sorted search never lands on them.
-    return Recording.empty(names, capacity, dtype, fill={"hinge": jnp.inf})
+    return Recording.empty(names, capacity, dtype)
 
 
 # --------------------------------------------------------------------------------------
