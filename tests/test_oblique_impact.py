@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from barrierjax.hinge import normal_impact
-from barrierjax.hinge.oblique import _quintic_hermite, moving_load, oblique_impact
+from barrierjax._solve.hermite import quintic_hermite
+from barrierjax.hinge.oblique import moving_load, oblique_impact
 
 # Light and moderate vehicles (mu <= 5); see the module's notes on heavy ones.
 NORMAL_CASES = [(5.0, 2.0, 0.6), (0.05, 20.0, 0.2), (1.0, 1.5, 0.7)]
@@ -94,9 +95,10 @@ def test_quintic_hermite_is_exact_on_quintics():
     a, b = 0.4, 1.1
     ends = [(f(x), df(x), d2f(x)) for x in (a, b)]
     for x in np.linspace(a, b, 7):
-        value, slope = _quintic_hermite((x - a) / (b - a), b - a, *ends)
+        value, slope, curvature = quintic_hermite((x - a) / (b - a), b - a, *ends)
         assert float(value) == pytest.approx(float(f(x)), abs=1e-13)
         assert float(slope) == pytest.approx(float(df(x)), abs=1e-12)
+        assert float(curvature) == pytest.approx(float(d2f(x)), abs=1e-11)
 
 
 @pytest.mark.parametrize("friction", [0.0, 0.3])

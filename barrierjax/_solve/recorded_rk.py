@@ -1,17 +1,27 @@
-"""An adaptive Dormand-Prince 5(4) step loop whose vector field may read the solution's own
-past, recorded in a fixed-size buffer.
+"""An adaptive Dormand-Prince 5(4) step loop through a sequence of stages, whose vector
+field may read the solution's own past, recorded in a fixed-size buffer.
 
 diffrax vector fields see only the current state, but a state-dependent delay (the slope
 under a moving load, report 3.3) needs the solution at an earlier, state-dependent time.
 This loop records one sample per accepted step into a buffer carried in the loop state
 and hands the vector field a view of it, taken once per step (for example the few samples
-around the current state, so that the stages read no more than that). A phase ends where
-a real-valued event function falls to zero: the crossing step is retaken with the length
-that puts the event exactly on zero (safeguarded regula falsi on the step length, then one
-Newton correction), so the phase's end carries an exact gradient. Differentiate in
-forward mode (`sensitivity.forward_jacobian_jvp`): the loops are while loops.
+around the current state, so that the stages read no more than that).
+
+A model runs through stages (phases, and segments of them), each with its own vector
+field and a real-valued event that ends it where it falls to zero; what comes next is the
+model's `transition`. All stages run in one loop, one step per iteration: under `vmap`
+every member steps until the slowest is done, so one loop over all stages costs the
+batch its slowest member's total, where a loop per stage would cost the sum, stage by
+stage, of the slowest members' counts. For the same reason the event is located without
+retaking the step: on the accepted step's quintic Hermite interpolant (from the value,
+the field and its derivative along the solution at both ends, error O(step^6), below the
+step's own), by safeguarded regula falsi and then one Newton correction whose slope
+carries no derivative, so that the stage's end carries the implicit function theorem's
+gradient. Differentiate in forward mode (`sensitivity.forward_jacobian_jvp`): the loop is
+a while loop.
 """
 
+import functools
 from collections.abc import Callable
 
 import equinox as eqx
@@ -20,6 +30,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int, PyTree
+
+from .hermite import quintic_hermite
 
 # Dormand & Prince (1980), the tableau of diffrax.Dopri5; the last stage is first-same-as-last.
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -43,10 +55,6 @@ _B_ERROR = np.array(
         -1 / 40,
     ]
 )
-
-
-# The event's root is bracketed to this fraction of the step before the Newton correction.
-_BRACKET_TOLERANCE = 1e-9
 
 
 class Recording(eqx.Module):
@@ -97,10 +105,10 @@ def _combine(y, h, weights, ks):
     )
 
 
-def _step(field, t, y, f0, h, args, past):
+def _step(vector, y, f0, h):
     ks = [f0]
-    for c, a in zip(_C[1:], _A[1:]):
-        ks.append(field(t + c * h, _combine(y, h, a, ks), args, past))
+    for a in _A[1:]:
+        ks.append(vector(_combine(y, h, a, ks)))
     y1 = _combine(y, h, _A[6], ks[:6])
     error = _combine(jax.tree.map(jnp.zeros_like, y), h, _B_ERROR, ks)
     return y1, error, ks[6]
@@ -117,172 +125,186 @@ def _error_ratio(y0, y1, error, rtol, atol):
     return jnp.sqrt(sum(leaves) / len(leaves))
 
 
-class PhaseEnd(eqx.Module):
-    t: Float[Array, ""]
+def _interpolant(start, end, length):
+    """The step's quintic Hermite interpolant of (y, f, f') through `start` and `end`, each
+    (y, f, f'), as a function of the fraction of the step."""
+
+    def at(u):
+        return tuple(
+            jax.tree.map(
+                lambda *ends, k=k: quintic_hermite(u, length, ends[:3], ends[3:])[k], *start, *end
+            )
+            for k in range(3)
+        )
+
+    return at
+
+
+def _locate(event, start, end, e_start, e_end, length):
+    """Where the first of the terms of `event` falls to zero on the step from `start` to
+    `end` (each (y, f, f')), every term being positive at the start and one not at the
+    end: the interpolant there.
+
+    Each term is smooth where the minimum of them would have kinks, so each that crosses
+    is found on its own by Newton's method safeguarded by bisection (the interpolant's
+    derivatives are exact), from the secant through the step's ends; then one Newton
+    correction of the first, whose slope carries no derivative: the fraction's
+    derivative is the implicit function theorem's."""
+    at = _interpolant(start, end, length)
+    term = lambda i, u: event(*at(u)[:2])[i]
+    crossing = e_end <= 0.0
+    # (Only the stopped fractions leave the iterations: their tangents are dead code.)
+    e_start, e_end = jax.lax.stop_gradient((e_start, e_end))
+    u = jnp.clip(e_start / jnp.where(crossing, e_start - e_end, 1.0), 0.0, 1.0)
+
+    def newton(_, bracketed):
+        u, lo, hi = bracketed
+        e, slope = jnp.stack(
+            [jnp.stack(jax.jvp(functools.partial(term, i), (u[i],), (1.0,))) for i in range(len(u))]
+        ).T
+        lo, hi = jnp.where(e > 0.0, u, lo), jnp.where(e > 0.0, hi, u)
+        step = u - e / jnp.where(slope != 0.0, slope, 1.0)
+        return jnp.where((step > lo) & (step < hi), step, 0.5 * (lo + hi)), lo, hi
+
+    start = (u, jnp.zeros_like(u), jnp.ones_like(u))
+    u, _, _ = jax.lax.fori_loop(0, _NEWTON_ITERATIONS, newton, start)
+    u = jax.lax.stop_gradient(jnp.where(crossing, u, jnp.inf))
+    first = jnp.argmin(u)
+    u = jnp.min(u)
+    e, slope = jax.jvp(lambda u: event(*at(u)[:2])[first], (u,), (jnp.ones_like(u),))
+    slope = jax.lax.stop_gradient(slope)
+    return at(jnp.clip(u - e / jnp.where(slope != 0.0, slope, 1.0), 0.0, 1.0))
+
+
+# Newton iterations of `_locate`, unrolled (XLA then fuses them into the step's kernels;
+# the cost of each of a few is not measurable, but fused, a read of one iteration's result
+# by the next is recomputed, and the cost doubles with each past about eight): from the
+# secant, three reach rounding on a smooth term over a step the error control accepted.
+_NEWTON_ITERATIONS = 3
+
+_STEP, _START, _DONE = 0, 1, 2
+
+
+class Solution(eqx.Module):
     y: PyTree[Float[Array, ""]]
     derivative: PyTree[Float[Array, ""]]
+    stage: PyTree
     recording: Recording
-    steps: Int[Array, ""]
-    complete: Bool[Array, ""]  # the event was reached within the step budget
-
-
-def require_complete(end: PhaseEnd, phase: str) -> PhaseEnd:
-    """`end`, with a run-time error if its phase spent the step budget before its event.
-
-    The check is the caller's, not `solve_recorded`'s: under `vmap` a solve inside another
-    loop also runs for members that loop has finished with, and their results (and
-    failures) are discarded."""
-    y = eqx.error_if(
-        end.y,
-        ~end.complete,
-        f"{phase}: the step budget (max_steps) was spent before the phase ended: raise max_steps",
-    )
-    return eqx.tree_at(lambda e: e.y, end, y)
+    iterations: Int[Array, ""]
+    complete: Bool[Array, ""]  # every stage ended within the step budget
 
 
 def solve_recorded(
     field: Callable,
     y0,
-    t0,
-    args,
+    stage,
     recording: Recording,
     *,
     record: Callable,
     event: Callable,
+    transition: Callable,
+    view: Callable,
+    max_step: Callable,
     rtol: float,
     atol: float,
     h0,
-    max_step: Callable,
     max_steps: int,
-    view: Callable = lambda t, y, args, recording, previous: recording,
-    bracket_iterations: int = 64,
-) -> PhaseEnd:
-    """Integrate `field(t, y, args, past)` from `t0` until `event(t, y, f, args, past)`,
-    positive at the start, falls to zero.
+) -> Solution:
+    """Integrate the autonomous `field(y, stage, past)` from `y0` through the stages that
+    start with `stage`.
 
-    `past = view(t, y, args, recording, previous)` is taken at the start of each step and
-    serves every stage of it (by default the whole recording); `previous` is the last
-    step's, or None at the start, so that a view can be found from the one before.
-    `record(t, y, f, rate, args)` gives the sample appended to `recording` after each
-    accepted step (and at the start and the end), with `f` the field there and `rate` its
-    derivative along the solution, df/dt; `max_step(t, y, f, args, past)` bounds the step,
-    for example so that the stages never read past what `past` holds. An event
-    that is not positive at the start ends the phase there, after no step. A spent step
-    budget is flagged (`complete`), not raised: see `require_complete`.
+    A stage lasts while `event(y, f, stage)` is positive (it reads the state and the field
+    there alone, so that it can be located on an interpolant); where it falls to zero,
+    `transition(y, f, stage, recording) -> (y, stage, done)` gives the next stage and the
+    state it starts from, or ends the solve. Each stage starts with a step of length zero,
+    which evaluates its field; a stage whose event is not positive there ends after it.
+
+    `past = view(y, stage, recording, previous)` is taken at the start of each step and
+    serves every stage of it; `previous` is the last step's, or None at the start, so that
+    a view can be found from the one before. `record(y, f, rate, stage)` gives the sample
+    appended to `recording` after each accepted step (and at each stage's start and end),
+    with `f` the field there and `rate` its derivative along the solution, df/ds;
+    `max_step(y, f, stage, past)` bounds the step, for example so that the stages never
+    read past what `past` holds. The budget `max_steps` counts every iteration; spending
+    it is flagged (`complete`), not raised: under `vmap` a solve inside another loop also
+    runs for members that loop has finished with, and the caller decides.
 
     The loop carries the recording as an in-place buffer (`equinox.internal.while_loop`):
     under `vmap`, lax's while loop would select every member's whole buffer at every step,
     and the cost of a step would grow with the buffer's capacity.
     """
 
-    def rate(t, y, f, past):
+    def rate(vector, y, f):
         # Only the entries `record` reads survive dead-code elimination.
-        return jax.jvp(lambda t, y: field(t, y, args, past), (t, y), (jnp.ones_like(t), f))[1]
-
-    past = view(t0, y0, args, recording, None)
-    f0 = field(t0, y0, args, past)
-    recording = recording.append(record(t0, y0, f0, rate(t0, y0, f0, past), args))
-    dtype = jnp.result_type(t0)
-    ended_at_start = event(t0, y0, f0, args, past) <= 0.0
-
-    def cond(carry):
-        *_, steps, crossed = carry
-        return ~crossed & (steps < max_steps)
+        return jax.jvp(vector, (y,), (f,))[1]
 
     def body(carry):
-        t, y, f, h, rec, previous, steps, _ = carry
+        y, f, r, h, e, rec, previous, stage, mode, iterations = carry
+        past = view(y, stage, rec, previous)
+        vector = lambda y: field(y, stage, past)
+        stepping = mode == _STEP
         # Step lengths are a discretisation choice: no derivative flows through them.
-        past = view(t, y, args, rec, previous)
-        h = jax.lax.stop_gradient(jnp.minimum(h, max_step(t, y, f, args, past)))
-        y1, error, f1 = _step(field, t, y, f, h, args, past)
-        ratio = _error_ratio(y, y1, error, rtol, atol)
+        h_try = jax.lax.stop_gradient(jnp.minimum(h, max_step(y, f, stage, past)))
+        length = jnp.where(stepping, h_try, 0.0)
+        y1, error, f1 = _step(vector, y, f, length)
+        r1, e1 = rate(vector, y1, f1), event(y1, f1, stage)
+        ratio = jax.lax.stop_gradient(_error_ratio(y, y1, error, rtol, atol))
         # (A finite state whose field is not would carry a NaN into the next step length.)
         finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves((y1, f1))]))
         accept = (ratio <= 1.0) & finite
-        crossed = accept & (event(t + h, y1, f1, args, past) <= 0.0)
-        advance = accept & ~crossed
-        sample = record(t + h, y1, f1, rate(t + h, y1, f1, past), args)
-        new_rec = rec.append(sample, when=advance)
-        keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(advance, a, b), new, old)
-        ratio = jax.lax.stop_gradient(ratio)
+        ended = accept & (jnp.min(e1) <= 0.0)
+        # A stage ending within a step ends on the step's interpolant; one ending at its
+        # start ends there.
+        located = _locate(
+            lambda y, f: event(y, f, stage),
+            (y, f, r),
+            (y1, f1, r1),
+            e,
+            e1,
+            jnp.where(stepping, length, 1.0),
+        )
+        reached = jax.tree.map(
+            lambda a, b: jnp.where(ended & stepping, a, b), located, (y1, f1, r1)
+        )
+        rec = rec.append(record(*reached, stage, past), when=accept)
+        y_next, stage_next, rescale, done = transition(*reached[:2], stage, rec, past)
+        keep = lambda new, old, when: jax.tree.map(lambda a, b: jnp.where(when, a, b), new, old)
+        y_reached, f_reached, r_reached = reached
         factor = jnp.where(finite, jnp.clip(0.9 * ratio**-0.2, 0.2, 5.0), 0.2)
-        h_next = jnp.where(crossed, h, h * factor)
+        mode_next = jnp.where(ended, jnp.where(done, _DONE, _START), jnp.where(accept, _STEP, mode))
         return (
-            jnp.where(advance, t + h, t),
-            keep(y1, y),
-            keep(f1, f),
-            h_next.astype(dtype),
-            new_rec,
+            keep(keep(y_next, y_reached, ended), y, accept),
+            keep(f_reached, f, accept),
+            keep(r_reached, r, accept),
+            jnp.where(stepping, h_try * factor, h) * jnp.where(ended, rescale, 1.0),
+            jnp.where(accept, e1, e),
+            rec,
             past,
-            steps + 1,
-            crossed,
+            keep(stage_next, stage, ended),
+            mode_next,
+            iterations + 1,
         )
 
+    dtype = jnp.result_type(*jax.tree.leaves(y0))
+    n_events = jax.eval_shape(lambda: event(y0, y0, stage)).shape[0]
+    zeros = jax.tree.map(jnp.zeros_like, y0)
     start = (
-        t0,
         y0,
-        f0,
+        zeros,
+        zeros,
         jnp.asarray(h0, dtype),
+        jnp.ones(n_events, dtype),
         recording,
-        past,
+        view(y0, stage, recording, None),
+        stage,
+        jnp.asarray(_START),
         jnp.zeros((), jnp.int32),
-        ended_at_start,
     )
-    t, y, f, h, recording, previous, steps, crossed = eqxi.while_loop(
-        cond, body, start, kind="lax", buffers=lambda carry: carry[4].buffer
+    y, f, _, _, _, recording, _, stage, mode, iterations = eqxi.while_loop(
+        lambda carry: (carry[8] != _DONE) & (carry[9] < max_steps),
+        body,
+        start,
+        kind="lax",
+        buffers=lambda carry: carry[5].buffer,
     )
-
-    # The crossing lies within (t, t + h]: Illinois regula falsi on the step length, on
-    # the primal alone (the derivative comes from the implicit function theorem below).
-    # Its accuracy need only be enough for the Newton correction that follows, whose
-    # error is the square of it.
-    def event_after(length, t, y, f, args, past):
-        y1, _, f1 = _step(field, t, y, f, length, args, past)
-        return event(t + length, y1, f1, args, past)
-
-    past = view(t, y, args, recording, previous)
-    primal = jax.lax.stop_gradient((t, y, f, args, past))
-    primal_event = lambda length: event_after(length, *primal)
-
-    def unresolved(state):
-        lo, _, hi, e_hi, _, _, iteration = state
-        wide = jnp.abs(hi - lo) > _BRACKET_TOLERANCE * jnp.abs(h)
-        return wide & (e_hi != 0.0) & (iteration < bracket_iterations)
-
-    def illinois(state):
-        lo, e_lo, hi, e_hi, width_before, width_two_before, iteration = state
-        moved = e_hi != e_lo  # converged to rounding: stay
-        width = jnp.abs(hi - lo)
-        secant = hi - e_hi * (hi - lo) / jnp.where(moved, e_hi - e_lo, 1.0)
-        # Regula falsi crawls on a kinked event (the minimum of several): bisect where two
-        # iterations failed to halve the bracket.
-        mid = jnp.where(width > 0.5 * width_two_before, 0.5 * (lo + hi), secant)
-        mid = jnp.where(moved, mid, hi)
-        e_mid = primal_event(mid)
-        same_side = (e_mid > 0.0) == (e_hi > 0.0)
-        lo, e_lo = jnp.where(same_side, lo, hi), jnp.where(same_side, 0.5 * e_lo, e_hi)
-        return lo, e_lo, mid, e_mid, width, width_before, iteration + 1
-
-    h = jax.lax.stop_gradient(h)
-    e_start, e_end = event(*primal), primal_event(h)
-    # No bracket (the phase ended at its start, or never reached its event): no iteration,
-    # where under vmap an aimless one would hold up the whole batch.
-    bracketed = crossed & (e_start > 0.0) & (e_end <= 0.0)
-    iteration = jnp.where(bracketed, 0, bracket_iterations)
-    unknown = jnp.full_like(h, jnp.inf)
-    start = (jnp.zeros_like(h), e_start, h, e_end, unknown, unknown, iteration)
-    _, _, length, _, _, _, _ = jax.lax.while_loop(unresolved, illinois, start)
-    # The derivative, by the implicit function theorem: one Newton correction whose slope
-    # carries no derivative.
-    value, slope = jax.jvp(
-        lambda length: event_after(length, t, y, f, args, past),
-        (length,),
-        (jnp.ones_like(length),),
-    )
-    slope = jax.lax.stop_gradient(slope)
-    length = length - value / jnp.where(slope != 0.0, slope, 1.0)
-    length = jnp.where(ended_at_start, 0.0, length)
-    y_end, _, f_end = _step(field, t, y, f, length, args, past)
-    rate_end = rate(t + length, y_end, f_end, past)
-    recording = recording.append(record(t + length, y_end, f_end, rate_end, args))
-    return PhaseEnd(t + length, y_end, f_end, recording, steps, crossed)
+    return Solution(y, f, stage, recording, iterations, mode == _DONE)

@@ -78,15 +78,15 @@ import functools
 import math
 
 import equinox as eqx
-import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float, Int
+from jaxtyping import Array, Bool, Float, Int
 
 from .. import _checks
 from .._custom_types import Scalar
 from .._solve.batching import sorted_chunks
-from .._solve.recorded_rk import PhaseEnd, Recording, require_complete, solve_recorded
+from .._solve.hermite import quintic_hermite
+from .._solve.recorded_rk import Recording, solve_recorded
 from .._solve.sensitivity import forward_jacobian_jvp
 
 # --------------------------------------------------------------------------------------
@@ -214,12 +214,12 @@ class _Past(eqx.Module):
     reach: Scalar
 
 
-def _past(t, y, p, recording: Recording, previous: _Past | None = None) -> _Past:
+def _past(y, stage, recording: Recording, previous: _Past | None = None) -> _Past:
     """The window of the trace from the interval holding the load, found once per step:
     by bisection, or from `previous`, the last step's window. The load only advances,
     and each step keeps it short of its window's reach (`_lookup_bound`), so the interval
     holding it now lies in the last window."""
-    first, last = p.segment
+    first, last = stage.first, stage.last
     recorded = jnp.maximum(recording.count - 1, 0)
     last = jnp.minimum(last, recorded)
     if previous is None:
@@ -234,38 +234,6 @@ def _past(t, y, p, recording: Recording, previous: _Past | None = None) -> _Past
     hinge = jnp.where(filled, window.pop("hinge"), jnp.inf)
     reach = jnp.max(jnp.where(filled, hinge, -jnp.inf))
     return _Past(hinge=hinge, **window, start=start, first=first, last=last, reach=reach)
-
-
-def _quintic_hermite(u, width, left, right):
-    """The quintic on [0, 1] through (value, slope, second derivative) at both ends, slopes
-    in x = u width: its value and its slope in x at u."""
-
-    def basis(u):
-        # Value, slope and second-derivative weights of the left end, and their u-slopes.
-        u2, u3, u4, u5 = u * u, u**3, u**4, u**5
-        return (
-            (
-                1 - 10 * u3 + 15 * u4 - 6 * u5,
-                u - 6 * u3 + 8 * u4 - 3 * u5,
-                0.5 * (u2 - 3 * u3 + 3 * u4 - u5),
-            ),
-            (
-                -30 * u2 + 60 * u3 - 30 * u4,
-                1 - 18 * u2 + 32 * u3 - 15 * u4,
-                0.5 * (2 * u - 9 * u2 + 12 * u3 - 5 * u4),
-            ),
-        )
-
-    # The right end's weights are the left end's at 1 - u, with the odd derivative negated.
-    (b0, b1, b2), (d0, d1, d2) = basis(u)
-    (c0, c1, c2), (e0, e1, e2) = basis(1.0 - u)
-    (p0, s0, k0), (p1, s1, k1) = left, right
-    w2 = width * width
-    value = b0 * p0 + width * b1 * s0 + w2 * b2 * k0 + c0 * p1 - width * c1 * s1 + w2 * c2 * k1
-    slope = (
-        d0 * p0 + width * d1 * s0 + w2 * d2 * k0 - e0 * p1 + width * e1 * s1 - w2 * e2 * k1
-    ) / width
-    return value, slope
 
 
 def _cubic_hermite(u, width, left, right):
@@ -315,7 +283,7 @@ def _slope_memory(past: _Past, x, s_star):
     left, right = data(i), data(j)
     width = jnp.where(interior, h_j - h_i, 1.0)
     u = jnp.where(interior, (x - h_i) / width, 0.0)
-    psi, dpsi = _quintic_hermite(u, width, left, right)
+    psi, dpsi, _ = quintic_hermite(u, width, left, right)
     # Next to a breakpoint the second derivatives are one-sided limits of a fast-changing
     # trace: cubic there (the second-derivative data dropped), which stays stable where
     # breakpoints cluster.
@@ -333,7 +301,7 @@ def _slope_memory(past: _Past, x, s_star):
 
 
 # --------------------------------------------------------------------------------------
-# States and vector fields.
+# The state and its vector field, in every phase.
 
 
 class _Params(eqx.Module):
@@ -341,19 +309,22 @@ class _Params(eqx.Module):
     phi: Scalar
     friction: Scalar
     s_star: Scalar
-    segment: tuple  # (first, last) recorded samples the memory may read: `_slope_memory`
     moving_load: bool = eqx.field(static=True, default=False)
 
 
-class _Crushing(eqx.Module):
-    """Phase 1 state, against time T."""
+class _State(eqx.Module):
+    """The state of every phase: against T while the vehicle crushes, with `speed` = V0;
+    then against s, dT/ds = V0, with `speed` = ln V0 (the decelerative phases end at
+    V0 -> 0, where S' = g_i/V0 is 0/0 in T and every rate in s is regular). Both have the
+    rate V0'(T)."""
 
-    v0: Scalar
+    speed: Scalar
     s1: Scalar
     s2: Scalar
+    time: Scalar
     position: Scalar
     rotation: Scalar  # Phi
-    vehicle_normal: Scalar
+    vehicle_normal: Scalar  # integrated while crushing; then the exit value (`_transition`)
     vehicle_tangential: Scalar
     crush: Scalar
     contact_displacement: Scalar
@@ -363,22 +334,60 @@ class _Crushing(eqx.Module):
     slope_work: Scalar
 
 
-class _Sliding(eqx.Module):
-    """Phase 2 and 3 state, against s with dT/ds = V0."""
+_CRUSHING, _CONTACT, _FREE = 1, 2, 3
 
-    log_v0: Scalar
-    s1: Scalar
-    s2: Scalar
-    time: Scalar
-    position: Scalar
-    rotation: Scalar
-    vehicle_normal: Scalar  # used after separation only
-    vehicle_tangential: Scalar
-    contact_displacement: Scalar
-    backing_work: Scalar
-    hinge_work: Scalar
-    friction_work: Scalar
-    slope_work: Scalar
+
+class _Breakpoints(eqx.Module):
+    """Points of the right hinge's trace where Psi' jumps or has a kink, not yet reached
+    by the load, in the order the load meets them: `position` and the indices of the
+    recorded samples holding the left and right limits there. Two slots suffice (see
+    `_transition`); an empty slot is at +inf."""
+
+    position: Float[Array, "2"]
+    left: Int[Array, "2"]
+    right: Int[Array, "2"]
+
+    @classmethod
+    def at_contact(cls, y: _State, s_star, left):
+        """Those pending when the contact starts (its first sample, the left limit at the
+        right hinge H(T*), recorded at `left`; the right limit next): H(T*), after S*
+        where the load has not reached S* (Psi' has a kink there, where the trace
+        starts)."""
+        hinge, zero = y.position + y.s1, 0 * left
+        ahead = y.position < s_star
+        return cls(
+            jnp.where(ahead, jnp.stack([s_star, hinge]), jnp.stack([hinge, jnp.inf])),
+            jnp.where(ahead, jnp.stack([zero, left]), jnp.stack([left, zero])),
+            jnp.where(ahead, jnp.stack([zero, left + 1]), jnp.stack([left + 1, zero])),
+        )
+
+    def pop_and_push(self, position, left):
+        """Drop the head and append a breakpoint created now: ahead of every other, since
+        the hinge only advances."""
+        filled = jnp.isfinite(self.position[1])
+        pick = lambda old, new, empty: jnp.where(
+            filled, jnp.stack([old[1], new]), jnp.stack([new, empty])
+        )
+        return _Breakpoints(
+            pick(self.position, position, jnp.inf),
+            pick(self.left, left, 0),
+            pick(self.right, left + 1, 0),
+        )
+
+
+class _Stage(eqx.Module):
+    """Where the solve is: the phase, the recorded samples the memory may read in this
+    segment of it (`_slope_memory`), the breakpoints ahead, and what the phases that
+    follow need from those before."""
+
+    phase: Int[Array, ""]
+    first: Int[Array, ""]
+    last: Int[Array, ""]
+    breakpoints: _Breakpoints
+    log_rest: Scalar  # ln V0 where the decelerative phases hand over to `_rest`
+    t_star: Scalar
+    separated: Bool[Array, ""]
+    overtaken: Bool[Array, ""]
 
 
 def _sliding_friction(vh, p: _Params):
@@ -388,8 +397,8 @@ def _sliding_friction(vh, p: _Params):
     return jnp.where(vh > 0.0, p.friction, 0.0)
 
 
-def _series_start(t, vn, vh, p: _Params) -> _Crushing:
-    """The crushing phase's state at a small time t, from its expansion about T = 0.
+def _series(t, vn, vh, p: _Params) -> dict:
+    """The crushing phase at a small time t, from its expansion about T = 0.
 
     At T = 0, V0 = 0 and S' = g_i/V0 is 0/0, and for force ratios near 1 the linearised
     hinge equations are stiff in proportion to 1/V0'(0): no explicit step from T = 0 is
@@ -398,7 +407,7 @@ def _series_start(t, vn, vh, p: _Params) -> _Crushing:
     phi/S*) (linearise the second and third lines of (3.3.16) about S1 = S2 = S*; the
     symmetric mode has no regular first-order part); the integrals follow to second order,
     so that the energy balance closes to O(t^3). The neglected terms are O(t^2), relative
-    O(t / T*)."""
+    O(t / T*). The state's quantities, with V0 for ln V0."""
     a = _acceleration(p.s_star, p.s_star, p.phi)
     sigma = -1.5 * a * vh / (a + 0.5 + p.phi / p.s_star)
     vehicle = 0.0 if p.moving_load else 1.0
@@ -408,91 +417,87 @@ def _series_start(t, vn, vh, p: _Params) -> _Crushing:
     slide = jnp.minimum(t, stop)
     slid = vh * slide - 0.5 * deceleration * slide**2
     contact_displacement = 0.5 * a * t**2
-    return _Crushing(
-        v0=a * t,
-        s1=p.s_star + sigma * t,
-        s2=p.s_star - sigma * t,
-        position=slid,
-        rotation=0.5 * a * t**2 / p.s_star,
-        vehicle_normal=vn - vehicle * p.phi * t / p.mu,
-        vehicle_tangential=vh - deceleration * slide,
-        crush=vehicle * (vn * t - 0.5 * p.phi * t**2 / p.mu - contact_displacement),
-        contact_displacement=contact_displacement,
-        backing_work=0.25 * a * p.s_star * t**2,
-        hinge_work=0.25 * a * t**2 / p.s_star,
-        friction_work=p.friction * p.phi * slid,
-        slope_work=jnp.zeros_like(t),
-    )
+    return {
+        "v0": a * t,
+        "s1": p.s_star + sigma * t,
+        "s2": p.s_star - sigma * t,
+        "time": t,
+        "position": slid,
+        "rotation": 0.5 * a * t**2 / p.s_star,
+        "vehicle_normal": vn - vehicle * p.phi * t / p.mu,
+        "vehicle_tangential": vh - deceleration * slide,
+        "crush": vehicle * (vn * t - 0.5 * p.phi * t**2 / p.mu - contact_displacement),
+        "contact_displacement": contact_displacement,
+        "backing_work": 0.25 * a * p.s_star * t**2,
+        "hinge_work": 0.25 * a * t**2 / p.s_star,
+        "friction_work": p.friction * p.phi * slid,
+        "slope_work": jnp.zeros_like(t),
+    }
 
 
-def _crushing_field(t, y: _Crushing, p: _Params, past: _Past) -> _Crushing:
+def _v0(y: _State, stage: _Stage):
+    return jnp.where(stage.phase == _CRUSHING, y.speed, jnp.exp(y.speed))
+
+
+def _contact_force(y: _State, v0, curvature, theta, p: _Params):
+    """The force ratio in contact: (3.3.20)-(3.3.22) solved for it."""
     vh = jnp.maximum(y.vehicle_tangential, 0.0)
-    force = p.phi
-    g1, g2 = _hinge_terms(y.s1, y.s2, force)
-    psi, _ = _slope_memory(past, y.position, p.s_star)
-    theta = psi - y.rotation
-    contact_velocity = y.v0 + theta * vh
-    backing, hinge = _beam_powers(y.v0, y.s1, y.s2)
-    vehicle = 0.0 if p.moving_load else 1.0
-    return _Crushing(
-        v0=_acceleration(y.s1, y.s2, force),
-        s1=g1 / y.v0 - 1.5 * vh,
-        s2=g2 / y.v0 + 1.5 * vh,
-        position=vh,
-        rotation=y.v0 / y.s1,
-        vehicle_normal=-vehicle * force / p.mu,
-        vehicle_tangential=-vehicle * _sliding_friction(vh, p) * force / p.mu,
-        crush=vehicle * (y.vehicle_normal - contact_velocity),
-        contact_displacement=contact_velocity,
-        backing_work=backing,
-        hinge_work=hinge,
-        friction_work=p.friction * force * vh,
-        slope_work=force * theta * vh,
-    )
-
-
-def _contact_force(y: _Sliding, p: _Params, past: _Past):
-    """(force ratio, slope under the load): (3.3.20)-(3.3.22) solved for the force."""
-    v0 = jnp.exp(y.log_v0)
-    vh = jnp.maximum(y.vehicle_tangential, 0.0)
-    psi, curvature = _slope_memory(past, y.position, p.s_star)
-    theta = psi - y.rotation
     s1, s2 = y.s1, y.s2
     numerator = (
         p.mu * (s1 * s2 + 3.0) / (2.0 * s1 * s2) + p.mu * vh * v0 / s1 - p.mu * vh**2 * curvature
     )
     # The friction term: the tangential deceleration f g / mu changes theta V_H.
-    force = numerator / (1.0 - _sliding_friction(vh, p) * theta + 4.0 * p.mu / (s1 + s2))
-    return force, theta
+    return numerator / (1.0 - _sliding_friction(vh, p) * theta + 4.0 * p.mu / (s1 + s2))
 
 
-def _sliding_field(in_contact: bool):
-    def field(s, y: _Sliding, p: _Params, past: _Past) -> _Sliding:
-        v0 = jnp.exp(y.log_v0)
+def _force(y: _State, f: _State):
+    """The force ratio that gives the field f, from the first line of (3.3.16)."""
+    return (f.speed + 1.5 / (y.s1 * y.s2) + 0.5) * (y.s1 + y.s2) / 4.0
+
+
+def _field(p: _Params):
+    """The state's rate, (3.3.16), with the force of the phase: phi while the vehicle
+    crushes, (3.3.22)'s in contact, none once it has left (the load then stands still
+    and the memory is not read)."""
+    vehicle = 0.0 if p.moving_load else 1.0
+
+    def field(y: _State, stage: _Stage, past: _Past) -> _State:
+        crushing, free = stage.phase == _CRUSHING, stage.phase == _FREE
+        v0 = _v0(y, stage)
+        per_time = jnp.where(crushing, 1.0, v0)  # dT per unit of the phase's variable
         vh = jnp.maximum(y.vehicle_tangential, 0.0)
-        if in_contact:
-            force, theta = _contact_force(y, p, past)
-            load_speed = vh
-        else:
-            force, theta, load_speed = 0.0, 0.0, 0.0
+        psi, curvature = _slope_memory(past, y.position, p.s_star)
+        theta = jnp.where(free, 0.0, psi - y.rotation)
+        force = jnp.where(
+            crushing, p.phi, jnp.where(free, 0.0, _contact_force(y, v0, curvature, theta, p))
+        )
+        load_speed = jnp.where(free, 0.0, vh)
+        contact_velocity = v0 + theta * load_speed
         g1, g2 = _hinge_terms(y.s1, y.s2, force)
         backing, hinge = _beam_powers(v0, y.s1, y.s2)
-        contact_velocity = v0 + theta * load_speed
-        zero = jnp.zeros_like(v0)
-        return _Sliding(
-            log_v0=_acceleration(y.s1, y.s2, force),
-            s1=g1 - 1.5 * load_speed * v0,
-            s2=g2 + 1.5 * load_speed * v0,
-            time=v0,
-            position=v0 * load_speed,
-            rotation=v0 * v0 / y.s1,
-            vehicle_normal=zero,
-            vehicle_tangential=-v0 * _sliding_friction(vh, p) * force / p.mu,
-            contact_displacement=v0 * contact_velocity,
-            backing_work=v0 * backing,
-            hinge_work=v0 * hinge,
-            friction_work=v0 * p.friction * force * vh,
-            slope_work=v0 * force * theta * vh,
+        # V0 S' = g_i, against T or s.
+        per_v0 = jnp.where(crushing, 1.0 / v0, 1.0)
+        rates_in_time = _State(
+            speed=jnp.zeros_like(v0),
+            s1=-1.5 * load_speed,
+            s2=1.5 * load_speed,
+            time=jnp.ones_like(v0),
+            position=load_speed,
+            rotation=v0 / y.s1,
+            vehicle_normal=jnp.where(crushing, -vehicle * force / p.mu, 0.0),
+            vehicle_tangential=-vehicle * _sliding_friction(vh, p) * force / p.mu,
+            crush=jnp.where(crushing, vehicle * (y.vehicle_normal - contact_velocity), 0.0),
+            contact_displacement=contact_velocity,
+            backing_work=backing,
+            hinge_work=hinge,
+            friction_work=p.friction * force * vh,
+            slope_work=force * theta * load_speed,
+        )
+        rates = jax.tree.map(lambda r: per_time * r, rates_in_time)
+        return eqx.tree_at(
+            lambda r: (r.speed, r.s1, r.s2),
+            rates,
+            (_acceleration(y.s1, y.s2, force), rates.s1 + per_v0 * g1, rates.s2 + per_v0 * g2),
         )
 
     return field
@@ -503,10 +508,10 @@ def _sliding_field(in_contact: bool):
 # quantities of the histories.
 
 
-def _sample(phase, time, v0, s1, s2, position, rotation, f, rate, **extra):
+def _sample(phase, v0, f, rate, y, **extra):
     """One recorded step. The trace of the right hinge H = F + S1 carries Psi's data at H:
-    Phi, dPhi/dH = Phi'/H' and d2Phi/dH2 = (Phi'' H' - Phi' H'')/H'^3 (primes: the phase's
-    own variable, T or s; the ratios do not depend on which); zero while the hinge stands."""
+    Phi, dPhi/dH = Phi'/H' and d2Phi/dH2 = (Phi'' H' - Phi' H'')/H'^3 (primes: d/ds or
+    d/dT; the ratios do not depend on which); zero while the hinge stands."""
     hinge_speed, hinge_acceleration = f.position + f.s1, rate.position + rate.s1
     moving = hinge_speed > 0.0
     speed = jnp.where(moving, hinge_speed, 1.0)
@@ -515,76 +520,51 @@ def _sample(phase, time, v0, s1, s2, position, rotation, f, rate, **extra):
         moving, (rate.rotation * speed - f.rotation * hinge_acceleration) / speed**3, 0.0
     )
     return dict(
-        hinge=position + s1,
-        rotation=rotation,
+        hinge=y.position + y.s1,
+        rotation=y.rotation,
         curvature=curvature,
         curvature_rate=curvature_rate,
-        phase=jnp.full_like(v0, phase),
-        time=time,
+        phase=phase,
+        time=y.time,
         v0=v0,
-        s1=s1,
-        s2=s2,
-        position=position,
-        **extra,
-    )
-
-
-def _record_crushing(t, y: _Crushing, f: _Crushing, rate: _Crushing, p: _Params):
-    return _sample(
-        1.0,
-        t,
-        y.v0,
-        y.s1,
-        y.s2,
-        y.position,
-        y.rotation,
-        f,
-        rate,
-        vehicle_normal=y.vehicle_normal,
+        s1=y.s1,
+        s2=y.s2,
+        position=y.position,
         vehicle_tangential=y.vehicle_tangential,
-        force=jnp.full_like(y.v0, 0.0 if p.moving_load else 1.0) * p.phi,
-        slope=f.slope_work / jnp.where(f.position != 0.0, p.phi * f.position, 1.0),
         crush=y.crush,
         contact_displacement=y.contact_displacement,
         backing_work=y.backing_work,
         hinge_work=y.hinge_work,
         friction_work=y.friction_work,
         slope_work=y.slope_work,
+        **extra,
     )
 
 
-def _record_sliding(in_contact: bool):
-    def record(s, y: _Sliding, f: _Sliding, rate: _Sliding, p: _Params):
-        # f holds d/ds = V0 d/dT.
-        v0 = jnp.exp(y.log_v0)
-        if in_contact:
-            force = (f.log_v0 + 1.5 / (y.s1 * y.s2) + 0.5) * (y.s1 + y.s2) / 4.0
-            vehicle_normal = f.contact_displacement / v0
-            slope = (vehicle_normal - v0) / jnp.where(f.position != 0.0, f.position / v0, 1.0)
-        else:
-            force = jnp.zeros_like(v0)
-            vehicle_normal = y.vehicle_normal
-            slope = jnp.zeros_like(v0)
+def _slope(y: _State, p: _Params, past: _Past):
+    """theta, the slope under the load (3.3.4)-(3.3.6), read from the memory: where V0 is
+    small, the field's V0 (V0 + theta V_H) over V0 would amplify any error in it."""
+    return _slope_memory(past, y.position, p.s_star)[0] - y.rotation
+
+
+def _record(p: _Params):
+    def record(y: _State, f: _State, rate: _State, stage: _Stage, past: _Past):
+        v0 = _v0(y, stage)
+        crushing, contact = stage.phase == _CRUSHING, stage.phase == _CONTACT
+        force = jnp.where(crushing, p.phi, jnp.where(contact, _force(y, f), 0.0))
+        theta = jnp.where(crushing | contact, _slope(y, p, past), 0.0)
+        # In contact the vehicle moves with the load point: V0 + theta V_H.
+        vh = jnp.maximum(y.vehicle_tangential, 0.0)
+        vehicle_normal = jnp.where(contact, v0 + theta * vh, y.vehicle_normal)
         return _sample(
-            2.0 if in_contact else 3.0,
-            y.time,
+            jnp.asarray(stage.phase, v0.dtype),
             v0,
-            y.s1,
-            y.s2,
-            y.position,
-            y.rotation,
             f,
             rate,
+            y,
             vehicle_normal=vehicle_normal,
-            vehicle_tangential=y.vehicle_tangential,
             force=force,
-            slope=slope,
-            crush=jnp.zeros_like(v0),  # the phase-1 crush, filled in afterwards
-            contact_displacement=y.contact_displacement,
-            backing_work=y.backing_work,
-            hinge_work=y.hinge_work,
-            friction_work=y.friction_work,
-            slope_work=y.slope_work,
+            slope=theta,
         )
 
     return record
@@ -615,114 +595,7 @@ def _empty_recording(capacity, dtype, history):
 
 
 # --------------------------------------------------------------------------------------
-# The phases.
-
-
-def _lookup_bound(rate_of_position):
-    """A step bound keeping the load's position within the step's window of the hinge's
-    trace: at most half the gap between the load and the window's reach."""
-
-    def max_step(t, y, f, p, past: _Past):
-        rate = rate_of_position(y)
-        gap = jnp.maximum(past.reach - y.position, 0.0)
-        return jnp.where(rate > 0.0, 0.5 * gap / jnp.where(rate > 0.0, rate, 1.0), jnp.inf)
-
-    return max_step
-
-
-class _Breakpoints(eqx.Module):
-    """Points of the right hinge's trace where Psi' jumps or has a kink, not yet reached
-    by the load, in the order the load meets them: `position` and the indices of the
-    recorded samples holding the left and right limits there. Two slots suffice (see
-    `_contact_segments`); an empty slot is at +inf."""
-
-    position: Float[Array, "2"]
-    left: Int[Array, "2"]
-    right: Int[Array, "2"]
-
-    def head(self):
-        return self.position[0], self.left[0], self.right[0]
-
-    def pop_and_push(self, position, left):
-        """Drop the head and append a breakpoint created now: ahead of every other, since
-        the hinge only advances."""
-        filled = jnp.isfinite(self.position[1])
-        pick = lambda old, new, empty: jnp.where(
-            filled, jnp.stack([old[1], new]), jnp.stack([new, empty])
-        )
-        return _Breakpoints(
-            pick(self.position, position, jnp.inf),
-            pick(self.left, left, 0),
-            pick(self.right, left + 1, 0),
-        )
-
-
-def _contact_segments(sliding, start, first, p: _Params, contact_event, max_steps):
-    """The contact phase, as segments between the breakpoints of the deposited curvature.
-
-    The force in contact reads Psi'(F), so its vector field jumps where Psi' jumps and has
-    a kink where Psi' has one. Psi' jumps where the right hinge stood at T* (the force
-    drops there, and with it S1'), and has a kink at S*, where the trace starts. When the
-    load reaches such a point the force jumps (or kinks), and so does the curvature the
-    right hinge deposits at that moment: a neutral delay equation propagates its
-    breakpoints, x_new = H(T_k) where F(T_k) = x_k. A new breakpoint lies ahead of every
-    pending one, so at most two are pending (S* and H(T*) at the start). Each segment
-    ends exactly on the next one, so that no step straddles it (a straddling step misses
-    the jump's contribution to the derivatives, O(1), or a kink's, O(step)), and reads
-    the trace only between its two breakpoints. The end of a segment and the start of the
-    next record the left and right limits at the new breakpoint. Returns the final
-    segment's end and its parameters.
-    """
-    recording = first.recording
-    int_ = recording.count.dtype
-    first_hinge = p.s_star  # where the trace starts, at T = 0
-    # The last sample of the crushing phase is the left limit at H(T*).
-    h_t_star, left = start.position + start.s1, recording.count - 1
-    no_s_star = _Breakpoints(
-        jnp.stack([h_t_star, jnp.inf]), jnp.stack([left, 0]), jnp.stack([left + 1, 0])
-    )
-    s_star_first = _Breakpoints(
-        jnp.stack([first_hinge, h_t_star]), jnp.stack([0, left]), jnp.stack([0, left + 1])
-    )
-    pending = jax.tree.map(
-        lambda a, b: jnp.where(start.position < first_hinge, a, b), s_star_first, no_s_star
-    )
-
-    def segment(carry):
-        end, p, pending, behind, _ = carry
-        position, left, right = pending.head()
-        p = eqx.tree_at(lambda p: p.segment, p, (behind, left))
-        event = lambda s, y, f, p, past: jnp.minimum(
-            contact_event(s, y, f, p, past), position - y.position
-        )
-        end = sliding(True, end.y, end.recording, p, event)
-        crossed = position - end.y.position < contact_event(
-            0.0, end.y, end.derivative, p, _past(0.0, end.y, p, end.recording)
-        )
-        created = pending.pop_and_push(end.y.position + end.y.s1, end.recording.count - 1)
-        keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(crossed, a, b), new, old)
-        return (
-            end,
-            p,
-            keep(created, pending),
-            jnp.where(crossed, right, behind),
-            crossed,
-        )
-
-    # (`derivative` is a placeholder of the right structure: no segment reads it.)
-    initial = PhaseEnd(first.t, start, start, recording, first.steps, first.complete)
-    carry = (initial, p, pending, jnp.zeros((), int_), jnp.asarray(True))
-    end, p, _, _, crossed = eqxi.while_loop(
-        lambda c: c[-1] & (c[0].recording.count < max_steps),
-        segment,
-        carry,
-        kind="lax",
-        buffers=lambda c: c[0].recording.buffer,
-    )
-    # (Still on a breakpoint: the budget ran out between segments.)
-    end = eqx.tree_at(lambda e: e.complete, end, end.complete & ~crossed)
-    return require_complete(end, "contact phase"), p
-
+# The stages: crushing; contact, in segments between the breakpoints of Psi'; free.
 
 # The contact phase stops where S1 falls to this fraction of S*: there the load has caught
 # up with the hinge ahead of it, V0 and the force grow without bound, and the mechanism of
@@ -734,6 +607,129 @@ _OVERTAKEN = 1e-3
 _EFOLDS_PER_STEP = 2.0
 
 
+def _contact_end(y: _State, f: _State, stage: _Stage, p: _Params):
+    """Positive while the contact lasts: it ends where the force would fall below zero
+    (separation), at V0 = V0* rtol e^-3 (the run-out to rest is analytic, `_rest`), or
+    where the load catches up with the hinge ahead (an error)."""
+    return jnp.minimum(
+        jnp.minimum(_force(y, f) / p.phi, y.speed - stage.log_rest),
+        y.s1 / p.s_star - _OVERTAKEN,
+    )
+
+
+def _event(p: _Params, t_end):
+    """The terms whose first zero ends the stage: the crushing phase's (the vehicle
+    stops crushing where its velocity is the load point's; the moving load's at t_end),
+    the contact's (`_contact_end`, and the next breakpoint) or the free phase's."""
+
+    def event(y: _State, f: _State, stage: _Stage):
+        phase = stage.phase
+        if p.moving_load:
+            crushing = t_end - y.time
+        else:
+            crushing = y.vehicle_normal - f.contact_displacement
+        free = y.speed - stage.log_rest
+        contact = (
+            _force(y, f) / p.phi,
+            y.speed - stage.log_rest,
+            y.s1 / p.s_star - _OVERTAKEN,
+            stage.breakpoints.position[0] - y.position,
+        )
+        first = jnp.where(
+            phase == _CRUSHING, crushing, jnp.where(phase == _CONTACT, contact[0], free)
+        )
+        rest = [jnp.where(phase == _CONTACT, term, jnp.inf) for term in contact[1:]]
+        return jnp.stack([first, *rest])
+
+    return event
+
+
+def _transition(p: _Params, rtol):
+    """What follows the end of a stage.
+
+    The contact phase runs in segments between the breakpoints of the deposited
+    curvature. The force in contact reads Psi'(F), so its vector field jumps where Psi'
+    jumps and has a kink where Psi' has one. Psi' jumps where the right hinge stood at T*
+    (the force drops there, and with it S1'), and has a kink at S*, where the trace
+    starts. When the load reaches such a point the force jumps (or kinks), and so does the
+    curvature the right hinge deposits at that moment: a neutral delay equation propagates
+    its breakpoints, x_new = H(T_k) where F(T_k) = x_k. A new breakpoint lies ahead of
+    every pending one, so at most two are pending (S* and H(T*) at the start). Each
+    segment ends exactly on the next one, so that no step straddles it (a straddling step
+    misses the jump's contribution to the derivatives, O(1), or a kink's, O(step)), and
+    reads the trace only between its two breakpoints. The end of a segment and the start
+    of the next record the left and right limits at the new breakpoint.
+
+    After the contact: the free phase if the vehicle separated, or the end. The state's
+    `vehicle_normal` then holds the exit velocity: the load point's at separation, (3.3.3)
+    with V0 = 0 (theta V_H) at rest in contact."""
+
+    def transition(y: _State, f: _State, stage: _Stage, recording: Recording, past: _Past):
+        left = recording.count - 1  # this stage's last sample
+        if p.moving_load:
+            return y, stage, 1.0, jnp.asarray(True)
+        crushing, in_contact = stage.phase == _CRUSHING, stage.phase == _CONTACT
+        v0 = _v0(y, stage)
+        # The crushing phase ends: the contact, against s, starts.
+        breakpoints = _Breakpoints.at_contact(y, p.s_star, left)
+        contact = _Stage(
+            phase=jnp.asarray(_CONTACT),
+            first=jnp.zeros_like(left),
+            last=breakpoints.left[0],
+            breakpoints=breakpoints,
+            log_rest=jnp.log(v0) + jnp.log(rtol) - 3.0,
+            t_star=y.time,
+            separated=stage.separated,
+            overtaken=stage.overtaken,
+        )
+        # A segment of the contact ends on a breakpoint: the next starts.
+        ahead = stage.breakpoints
+        on_breakpoint = in_contact & (ahead.position[0] - y.position < _contact_end(y, f, stage, p))
+        pending = ahead.pop_and_push(y.position + y.s1, left)
+        segment = eqx.tree_at(
+            lambda s: (s.first, s.last, s.breakpoints),
+            stage,
+            (ahead.right[0], pending.left[0], pending),
+        )
+        # The contact ends: the free phase follows a separation.
+        separated = _force(y, f) / p.phi < y.speed - stage.log_rest
+        overtaken = y.s1 / p.s_star < 2.0 * _OVERTAKEN
+        ended = eqx.tree_at(
+            lambda s: (s.phase, s.separated, s.overtaken),
+            stage,
+            (jnp.where(separated, _FREE, _CONTACT), separated, overtaken),
+        )
+        contact_ends = in_contact & ~on_breakpoint
+        exit_normal = jnp.where(separated, v0, 0.0) + _slope(y, p, past) * jnp.maximum(
+            y.vehicle_tangential, 0.0
+        )
+        y = eqx.tree_at(
+            lambda y: (y.speed, y.vehicle_normal),
+            y,
+            (
+                jnp.where(crushing, jnp.log(v0), y.speed),
+                jnp.where(contact_ends, exit_normal, y.vehicle_normal),
+            ),
+        )
+        pick = lambda when, a, b: jax.tree.map(lambda x, z: jnp.where(when, x, z), a, b)
+        stage_next = pick(crushing, contact, pick(on_breakpoint, segment, ended))
+        done = (contact_ends & (~separated | overtaken)) | (stage.phase == _FREE)
+        # A step of dT from the crushing phase is one of dT / V0 in s.
+        return y, stage_next, jnp.where(crushing, 1.0 / v0, 1.0), done
+
+    return transition
+
+
+def _max_step(y: _State, f: _State, stage: _Stage, past: _Past):
+    """At most `_EFOLDS_PER_STEP` e-folds of V0, and the load's position kept within the
+    step's window of the hinge's trace: at most half the gap to the window's reach."""
+    efolds = jnp.where(stage.phase == _CRUSHING, jnp.inf, _EFOLDS_PER_STEP / jnp.abs(f.speed))
+    gap = jnp.maximum(past.reach - y.position, 0.0)
+    moving = f.position > 0.0
+    lookup = jnp.where(moving, 0.5 * gap / jnp.where(moving, f.position, 1.0), jnp.inf)
+    return jnp.minimum(efolds, lookup)
+
+
 def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     """All phases in the speed-free dimensionless variables. With `t_end`, the moving
     load: phase 1 alone with no vehicle, to T = t_end."""
@@ -742,134 +738,94 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
     root = jnp.sqrt(phi**2 + 3.0)
     s_star = 3.0 / (root + phi)
     moving_load = t_end is not None
-    # One row per accepted step, and the start and end of each phase and segment: a phase
-    # may attempt max_steps - count steps, and fills at most two rows more than it accepts.
+    p = _Params(mu, phi, friction, s_star, moving_load=moving_load)
+    # One row per iteration, and one at T = 0.
     capacity = max_steps + 8
-    everything = (jnp.zeros((), jnp.int32), jnp.asarray(capacity, jnp.int32))
-    p = _Params(mu, phi, friction, s_star, everything, moving_load=moving_load)
     recording = _empty_recording(capacity, dtype, history)
-    atol = 1e-3 * rtol
-    time_scale = t_end if moving_load else 1.0 / (_acceleration(s_star, s_star, phi) + phi / mu)
+    a = _acceleration(s_star, s_star, phi)
+    time_scale = t_end if moving_load else 1.0 / (a + phi / mu)
 
+    # The histories and the hinge trace start at T = 0 itself, with the expansion's rates
+    # in T (the sample's ratios do not depend on the variable).
+    # (ln V0 is -inf there: the series' V0 goes to the sample, in the place of ln V0.)
+    series = lambda t: _series(t, zero + vn, zero + vh, p)
+    rate, acceleration = jax.jvp(
+        lambda t: jax.jvp(series, (t,), (jnp.ones_like(t),)), (zero,), (jnp.ones_like(zero),)
+    )[1]
+    as_state = lambda d: _State(speed=d["v0"], **{k: v for k, v in d.items() if k != "v0"})
+    start = series(zero)
+    recording = recording.append(
+        _sample(
+            jnp.asarray(_CRUSHING, dtype),
+            start["v0"],
+            as_state(rate),
+            as_state(acceleration),
+            as_state(start),
+            vehicle_normal=start["vehicle_normal"],
+            force=phi,
+            slope=zero,
+        )
+    )
     # The step loop starts where the expansion's error, relative O((t / T*)^2), is far
     # below rtol; the solution does not depend on where, so neither does its derivative.
     t_start = jax.lax.stop_gradient(1e-2 * jnp.sqrt(rtol) * time_scale)
-    crushing = _series_start(t_start, zero + vn, zero + vh, p)
-    # The histories and the hinge trace start at T = 0 itself, with the expansion's rates.
-    at_zero = functools.partial(_series_start, vn=zero + vn, vh=zero + vh, p=p)
-    rate_at_zero, acceleration_at_zero = jax.jvp(
-        lambda t: jax.jvp(at_zero, (t,), (jnp.ones_like(t),)), (zero,), (jnp.ones_like(zero),)
-    )[1]
-    recording = recording.append(
-        _record_crushing(zero, at_zero(zero), rate_at_zero, acceleration_at_zero, p)
+    start = series(t_start)
+    y0 = as_state(start)
+    none = _Breakpoints(
+        jnp.full((2,), jnp.inf, dtype), jnp.zeros((2,), jnp.int32), jnp.zeros((2,), jnp.int32)
     )
-    if moving_load:
-        event = lambda t, y, f, p, past: t_end - t
-    else:
-        event = lambda t, y, f, p, past: y.vehicle_normal - f.contact_displacement
-    first = solve_recorded(
-        _crushing_field,
+    crushing = _Stage(
+        phase=jnp.asarray(_CRUSHING),
+        first=jnp.zeros((), jnp.int32),
+        last=jnp.asarray(capacity, jnp.int32),
+        breakpoints=none,
+        log_rest=zero - jnp.inf,
+        t_star=zero,
+        separated=jnp.asarray(False),
+        overtaken=jnp.asarray(False),
+    )
+    solution = solve_recorded(
+        _field(p),
+        y0,
         crushing,
-        t_start,
-        p,
         recording,
-        record=_record_crushing,
-        event=event,
-        rtol=rtol,
-        atol=atol,
-        h0=t_start,
-        max_step=_lookup_bound(lambda y: y.vehicle_tangential),
-        max_steps=max_steps - recording.count,
+        record=_record(p),
+        event=_event(p, t_end),
+        transition=_transition(p, rtol),
         view=_past,
+        max_step=_max_step,
+        rtol=rtol,
+        atol=1e-3 * rtol,
+        h0=t_start,
+        max_steps=max_steps,
     )
-    first = require_complete(first, "moving load" if moving_load else "crushing phase")
-    if moving_load:
-        return p, first, None, None
-    y = first.y
-    contact = _Sliding(
-        log_v0=jnp.log(y.v0),
-        s1=y.s1,
-        s2=y.s2,
-        time=first.t,
-        position=y.position,
-        rotation=y.rotation,
-        vehicle_normal=first.derivative.contact_displacement,
-        vehicle_tangential=y.vehicle_tangential,
-        contact_displacement=y.contact_displacement,
-        backing_work=y.backing_work,
-        hinge_work=y.hinge_work,
-        friction_work=y.friction_work,
-        slope_work=y.slope_work,
-    )
-    log_rest = jnp.log(y.v0) + jnp.log(rtol) - 3.0
-
-    def contact_event(s, y, f, p, past):
-        force, _ = _contact_force(y, p, past)
-        overtaking = y.s1 / p.s_star - _OVERTAKEN
-        return jnp.minimum(jnp.minimum(force / p.phi, y.log_v0 - log_rest), overtaking)
-
-    lookup_bound = _lookup_bound(lambda y: jnp.exp(y.log_v0) * y.vehicle_tangential)
-
-    def max_step(in_contact, s, y, f, p, past):
-        bound = _EFOLDS_PER_STEP / jnp.abs(f.log_v0)
-        # After separation the load stands still and the memory is not read.
-        return jnp.minimum(bound, lookup_bound(s, y, f, p, past)) if in_contact else bound
-
-    def sliding(in_contact, start, recording, p, event):
-        field = _sliding_field(in_contact)
-        rate = field(zero, start, p, _past(zero, start, p, recording)).log_v0
-        return solve_recorded(
-            field,
-            start,
-            zero,
-            p,
-            recording,
-            record=_record_sliding(in_contact),
-            event=event,
-            rtol=rtol,
-            atol=atol,
-            h0=1e-2 * rtol**0.2 / jnp.abs(rate),
-            max_step=functools.partial(max_step, in_contact),
-            max_steps=max_steps - recording.count,
-            view=_past,
+    stage, y = solution.stage, solution.y
+    phases = {_CRUSHING: "moving load" if moving_load else "crushing phase"}
+    phases |= {_CONTACT: "contact phase", _FREE: "free phase"}
+    for phase, name in phases.items():
+        y = eqx.error_if(
+            y,
+            ~solution.complete & (stage.phase == phase),
+            f"{name}: the step budget (max_steps) was spent before the phase ended: raise "
+            "max_steps",
         )
-
-    second, p_end = _contact_segments(sliding, contact, first, p, contact_event, max_steps)
-    force_end, theta_end = _contact_force(
-        second.y, p_end, _past(zero, second.y, p_end, second.recording)
-    )
-    separated = force_end / phi < second.y.log_v0 - log_rest
-    overtaken = second.y.s1 / s_star < 2.0 * _OVERTAKEN
-    separated = eqx.error_if(
-        separated,
-        overtaken,
+    y = eqx.error_if(
+        y,
+        stage.overtaken,
         "the load caught up with the hinge ahead of it (S1 -> 0) in the contact phase: the "
         "vehicle slides faster than the barrier's plastic zone can run ahead, outside the "
         "three-hinge mechanism of report 3.3",
     )
-    # The free phase runs only after a separation; otherwise its event is negative at its
-    # start and it takes no step.
-    free_rest = jnp.where(separated, log_rest, second.y.log_v0 + 1.0)
-    vehicle_exit = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
-    free_start = eqx.tree_at(lambda s: s.vehicle_normal, second.y, vehicle_exit)
-    third = sliding(
-        False,
-        free_start,
-        second.recording,
-        p,
-        lambda s, y, f, p, past: y.log_v0 - free_rest,
-    )
-    third = require_complete(third, "free phase")
-    return p, first, second, (third, separated, theta_end)
+    return p, eqx.tree_at(lambda s: s.y, solution, y)
 
 
-def _rest(end, in_contact):
+def _rest(y: _State, f: _State, in_contact):
     """Add the motion from V0_end = V0* rtol e^-3 to rest, with the hinges frozen and the
     deceleration constant (its error is far below rtol): (time, extra displacement under
     the load)."""
-    v0 = jnp.exp(end.y.log_v0)
-    remaining = v0 / jnp.abs(end.derivative.log_v0)
-    sliding = end.derivative.contact_displacement / v0 - v0 if in_contact else 0.0
+    v0 = jnp.exp(y.speed)
+    remaining = v0 / jnp.abs(f.speed)
+    sliding = jnp.where(in_contact, y.vehicle_normal, 0.0)  # theta V_H (`_transition`)
     return remaining, (0.5 * v0 + sliding) * remaining
 
 
@@ -961,52 +917,40 @@ def _history(samples, count, p: _Params, x, displacement):
 
 
 def _oblique(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x):
-    p, first, second, (third, separated, theta_end) = _solve(
-        mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps, history=history
-    )
-    damage = first.y.crush
-    contact_rest, contact_extra = _rest(second, True)
-    free_rest, free_extra = _rest(third, False)
-    end = third.y
-    t_final = end.time + jnp.where(separated, free_rest, contact_rest)
-    w_final = end.contact_displacement + jnp.where(separated, free_extra, contact_extra)
-    # At separation the vehicle keeps the load point's velocity; at rest in contact it is
-    # (3.3.3) with V0 = 0: theta V_H.
-    at_separation = second.derivative.contact_displacement / jnp.exp(second.y.log_v0)
-    exit_normal = jnp.where(
-        separated, at_separation, theta_end * jnp.maximum(second.y.vehicle_tangential, 0.0)
-    )
-    # (Friction may have stopped the slide within the last step: no negative overshoot.)
-    exit_tangential = jnp.maximum(second.y.vehicle_tangential, 0.0)
-    recording = third.recording
+    p, solution = _solve(mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps, history=history)
+    y, f, stage = solution.y, solution.derivative, solution.stage
+    remaining, extra = _rest(y, f, ~stage.separated)
+    recording = solution.recording
     x = _grid(recording.samples, recording.count, n_x)
     hist = None
     if history:
         samples = _padded(recording.samples, recording.count)
         displacement = _displacement_field(samples, recording.count, x)
         final_displacement = displacement[-1]
-        samples["crush"] = jnp.where(samples["phase"] > 1.0, damage, samples["crush"])
         hist = _history(samples, recording.count, p, x, displacement)
     else:
         final_displacement = _final_displacement(recording, x)
-    max_deflection = jnp.maximum(jnp.max(final_displacement), w_final)
+    w_final = y.contact_displacement + extra
+    t_final = y.time + remaining
+    # (Friction may have stopped the slide within the last step: no negative overshoot.)
+    exit_tangential = jnp.maximum(y.vehicle_tangential, 0.0)
     return ObliqueImpact(
-        t_star=first.t,
+        t_star=stage.t_star,
         t_final=t_final,
-        s1_final=end.s1,
-        s2_final=end.s2,
+        s1_final=y.s1,
+        s2_final=y.s2,
         w_final=w_final,
-        max_deflection=max_deflection,
-        damage=damage,
-        exit_normal_speed=exit_normal,
+        max_deflection=jnp.maximum(jnp.max(final_displacement), w_final),
+        damage=y.crush,
+        exit_normal_speed=y.vehicle_normal,
         exit_tangential_speed=exit_tangential,
-        exit_angle_deg=jnp.degrees(jnp.arctan2(-exit_normal, exit_tangential)),
-        separated=separated.astype(t_final.dtype),
-        crush_work=phi * damage,
-        backing_work=end.backing_work,
-        hinge_work=end.hinge_work,
-        friction_work=end.friction_work,
-        slope_work=end.slope_work,
+        exit_angle_deg=jnp.degrees(jnp.arctan2(-y.vehicle_normal, exit_tangential)),
+        separated=stage.separated.astype(t_final.dtype),
+        crush_work=phi * y.crush,
+        backing_work=y.backing_work,
+        hinge_work=y.hinge_work,
+        friction_work=y.friction_work,
+        slope_work=y.slope_work,
         history=hist,
     )
 
@@ -1110,17 +1054,17 @@ def moving_load(
 def _moving_load(phi, vh, t_end, rtol, *, max_steps):
     def solve(phi, vh, t_end, rtol):
         one = jnp.ones_like(phi)
-        p, first, _, _ = _solve(
+        p, solution = _solve(
             one, phi, one, vh, 0.0 * one, rtol=rtol, max_steps=max_steps, history=True, t_end=t_end
         )
-        recording = first.recording
+        recording, y = solution.recording, solution.y
         samples = _padded(recording.samples, recording.count)
         x = _grid(samples, recording.count, _N_X)
         displacement = _displacement_field(samples, recording.count, x)
         return MovingLoad(
-            s1=first.y.s1,
-            s2=first.y.s2,
-            v0=first.y.v0,
+            s1=y.s1,
+            s2=y.s2,
+            v0=y.speed,
             history=_history(samples, recording.count, p, x, displacement),
         )
 
