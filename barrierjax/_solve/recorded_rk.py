@@ -15,7 +15,7 @@ batch its slowest member's total, where a loop per stage would cost the sum, sta
 stage, of the slowest members' counts. For the same reason the event is located without
 retaking the step: on the accepted step's quintic Hermite interpolant (from the value,
 the field and its derivative along the solution at both ends, error O(step^6), below the
-step's own), by safeguarded regula falsi and then one Newton correction whose slope
+step's own), by safeguarded Newton iterations and then one Newton correction whose slope
 carries no derivative, so that the stage's end carries the implicit function theorem's
 gradient. Differentiate in forward mode (`sensitivity.forward_jacobian_jvp`): the loop is
 a while loop.
@@ -166,8 +166,8 @@ def _locate(event, start, end, e_start, e_end, length):
         step = u - e / jnp.where(slope != 0.0, slope, 1.0)
         return jnp.where((step > lo) & (step < hi), step, 0.5 * (lo + hi)), lo, hi
 
-    start = (u, jnp.zeros_like(u), jnp.ones_like(u))
-    u, _, _ = jax.lax.fori_loop(0, _NEWTON_ITERATIONS, newton, start)
+    bracket = (u, jnp.zeros_like(u), jnp.ones_like(u))
+    u, _, _ = jax.lax.fori_loop(0, _NEWTON_ITERATIONS, newton, bracket)
     u = jax.lax.stop_gradient(jnp.where(crossing, u, jnp.inf))
     first = jnp.argmin(u)
     u = jnp.min(u)
@@ -176,10 +176,10 @@ def _locate(event, start, end, e_start, e_end, length):
     return at(jnp.clip(u - e / jnp.where(slope != 0.0, slope, 1.0), 0.0, 1.0))
 
 
-# Newton iterations of `_locate`, unrolled (XLA then fuses them into the step's kernels;
-# the cost of each of a few is not measurable, but fused, a read of one iteration's result
-# by the next is recomputed, and the cost doubles with each past about eight): from the
-# secant, three reach rounding on a smooth term over a step the error control accepted.
+# Newton iterations of `_locate`: from the secant, three reach rounding on a smooth term
+# over a step the error control accepted. They run in a loop of their own: unrolled, XLA
+# fused them into the step's kernels, and each added about 40 s to the compilation of a
+# batch (27 s with none, 104 s with two, 188 s with four) for no measurable run time.
 _NEWTON_ITERATIONS = 3
 
 _STEP, _START, _DONE = 0, 1, 2
@@ -213,21 +213,23 @@ def solve_recorded(
     """Integrate the autonomous `field(y, stage, past)` from `y0` through the stages that
     start with `stage`.
 
-    A stage lasts while `event(y, f, stage)` is positive (it reads the state and the field
-    there alone, so that it can be located on an interpolant); where it falls to zero,
-    `transition(y, f, stage, recording) -> (y, stage, done)` gives the next stage and the
-    state it starts from, or ends the solve. Each stage starts with a step of length zero,
-    which evaluates its field; a stage whose event is not positive there ends after it.
+    A stage lasts while every term of `event(y, f, stage)` (a vector, read from the state
+    and the field alone so that it can be located on an interpolant) is positive; where
+    the first falls to zero, `transition(y, f, stage, recording, past) -> (y, stage,
+    rescale, done)` gives the next stage, the state it starts from and the factor that
+    turns a step length in this stage's variable into one in the next's, or ends the
+    solve. Each stage starts with a step of length zero, which evaluates its field; a
+    stage whose event is not positive there ends after it.
 
     `past = view(y, stage, recording, previous)` is taken at the start of each step and
     serves every stage of it; `previous` is the last step's, or None at the start, so that
-    a view can be found from the one before. `record(y, f, rate, stage)` gives the sample
-    appended to `recording` after each accepted step (and at each stage's start and end),
-    with `f` the field there and `rate` its derivative along the solution, df/ds;
+    a view can be found from the one before. `record(y, f, rate, stage, past)` gives the
+    sample appended to `recording` after each accepted step (and at each stage's start and
+    end), with `f` the field there and `rate` its derivative along the solution;
     `max_step(y, f, stage, past)` bounds the step, for example so that the stages never
     read past what `past` holds. The budget `max_steps` counts every iteration; spending
-    it is flagged (`complete`), not raised: under `vmap` a solve inside another loop also
-    runs for members that loop has finished with, and the caller decides.
+    it is flagged (`complete`), not raised: the caller decides (under `vmap`, for example,
+    which members' failures count).
 
     The loop carries the recording as an in-place buffer (`equinox.internal.while_loop`):
     under `vmap`, lax's while loop would select every member's whole buffer at every step,

@@ -30,12 +30,13 @@ from the field's derivative along the solution), and Psi is their quintic Hermit
 interpolant, so that the memory is as accurate as the Dormand-Prince steps that record it.
 Psi = 0 ahead of the initial hinge, x < S*.
 
-Phases.
+Phases, all run by one step loop (`_solve.recorded_rk`: under `vmap` a loop per phase
+would wait, phase by phase, for the batch's slowest member).
 1. Crushing (accelerative, in time T): the vehicle crushes at constant force phi; its
    normal velocity U falls at phi/mu. At T = 0, V0 = 0 and S' = g/V0 is 0/0; its limit
    is the antisymmetric mode S1' = -S2' = -3/2 a V_H / (a + 1/2 + phi/S*) with
    a = V0'(0) (linearise the second and third lines about S1 = S2 = S*). The steps start
-   at T = 1e-2 rtol^1/2 T_scale from this expansion (`_series_start`): from T = 0 itself
+   at T = 1e-2 rtol^1/2 T_scale from this expansion (`_series`): from T = 0 itself
    no explicit step is stable when phi is near 1. The phase ends where the vehicle stops
    crushing: U = V0 + theta V_H.
 2. Contact (decelerative): the vehicle is rigid and follows the contact point, so
@@ -69,7 +70,7 @@ Where the model stops with an error rather than an answer:
   `_solve.recorded_rk` would remove this).
 
 Derivatives: the contact phase runs in segments between the breakpoints of Psi' (see
-`_contact_segments`), so that they match finite differences; `max_deflection`
+`_transition`), so that they match finite differences; `max_deflection`
 integrates the velocity field over the recorded steps by the trapezoidal rule on 129
 points (error O(step^2)).
 """
@@ -193,7 +194,7 @@ def _interval(recording: Recording, x, first, last):
 
 
 # The samples of the right hinge's trace that one step of the load may read: the step is
-# bounded to stay within them (`_lookup_bound`). A step of the load crosses about as many
+# bounded to stay within them (`_max_step`). A step of the load crosses about as many
 # samples as a step of the hinge records, one.
 _WINDOW = 8
 
@@ -217,7 +218,7 @@ class _Past(eqx.Module):
 def _past(y, stage, recording: Recording, previous: _Past | None = None) -> _Past:
     """The window of the trace from the interval holding the load, found once per step:
     by bisection, or from `previous`, the last step's window. The load only advances,
-    and each step keeps it short of its window's reach (`_lookup_bound`), so the interval
+    and each step keeps it short of its window's reach (`_max_step`), so the interval
     holding it now lies in the last window."""
     first, last = stage.first, stage.last
     recorded = jnp.maximum(recording.count - 1, 0)
@@ -349,10 +350,10 @@ class _Breakpoints(eqx.Module):
 
     @classmethod
     def at_contact(cls, y: _State, s_star, left):
-        """Those pending when the contact starts (its first sample, the left limit at the
-        right hinge H(T*), recorded at `left`; the right limit next): H(T*), after S*
-        where the load has not reached S* (Psi' has a kink there, where the trace
-        starts)."""
+        """Those pending when the contact starts: H(T*), where the right hinge stands (the
+        crushing phase's last sample, recorded at `left`, is the left limit there, the
+        contact's first the right one), and before it S*, where the trace starts (a
+        kink of Psi'), if the load has not reached it."""
         hinge, zero = y.position + y.s1, 0 * left
         ahead = y.position < s_star
         return cls(
@@ -991,8 +992,8 @@ def oblique_impact(
     - `friction`: Coulomb coefficient between vehicle and barrier, non-negative.
     - `rtol`: relative tolerance of the step loop (absolute: 1e-3 rtol).
     - `history`: also return the recorded steps and the displacement field.
-    - `max_steps`: step budget of the whole run, all phases together (also the size of
-      the recorded history).
+    - `max_steps`: step budget of the whole run: every attempted step, and one for the
+      start of each phase and segment (also the size of the recorded history).
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap`.
