@@ -171,7 +171,7 @@ def _locate(event, start, end, e_start, e_end, length):
     u = jax.lax.stop_gradient(jnp.where(crossing, u, jnp.inf))
     first = jnp.argmin(u)
     u = jnp.min(u)
-    e, slope = jax.jvp(lambda u: event(*at(u)[:2])[first], (u,), (jnp.ones_like(u),))
+    e, slope = jax.jvp(functools.partial(term, first), (u,), (jnp.ones_like(u),))
     slope = jax.lax.stop_gradient(slope)
     return at(jnp.clip(u - e / jnp.where(slope != 0.0, slope, 1.0), 0.0, 1.0))
 
@@ -190,7 +190,6 @@ class Solution(eqx.Module):
     derivative: PyTree[Float[Array, ""]]
     stage: PyTree
     recording: Recording
-    iterations: Int[Array, ""]
     complete: Bool[Array, ""]  # every stage ended within the step budget
 
 
@@ -302,11 +301,11 @@ def solve_recorded(
         jnp.asarray(_START),
         jnp.zeros((), jnp.int32),
     )
-    y, f, _, _, _, recording, _, stage, mode, iterations = eqxi.while_loop(
+    y, f, _, _, _, recording, _, stage, mode, _ = eqxi.while_loop(
         lambda carry: (carry[8] != _DONE) & (carry[9] < max_steps),
         body,
         start,
         kind="lax",
         buffers=lambda carry: carry[5].buffer,
     )
-    return Solution(y, f, stage, recording, iterations, mode == _DONE)
+    return Solution(y, f, stage, recording, mode == _DONE)
