@@ -616,11 +616,12 @@ _EFOLDS_PER_STEP = 2.0
 
 
 def _contact_end(y: _State, f: _State, stage: _Stage, p: _Params):
-    """Positive while the contact lasts: it ends where the force would fall below zero
-    (separation), at V0 = V0* rtol e^-3 (the run-out to rest is analytic, `_rest`), or
-    where the load catches up with the hinge ahead (an error)."""
-    return jnp.minimum(
-        jnp.minimum(_force(y, f) / p.phi, y.speed - stage.log_rest),
+    """The terms positive while the contact lasts: it ends where the force would fall
+    below zero (separation), at V0 = V0* rtol e^-3 (the run-out to rest is analytic,
+    `_rest`), or where the load catches up with the hinge ahead (an error)."""
+    return (
+        _force(y, f) / p.phi,
+        y.speed - stage.log_rest,
         y.s1 / p.s_star - _OVERTAKEN,
     )
 
@@ -637,12 +638,7 @@ def _event(p: _Params, t_end):
         else:
             crushing = y.vehicle_normal - f.contact_displacement
         free = y.speed - stage.log_rest
-        contact = (
-            _force(y, f) / p.phi,
-            y.speed - stage.log_rest,
-            y.s1 / p.s_star - _OVERTAKEN,
-            stage.breakpoints.position[0] - y.position,
-        )
+        contact = (*_contact_end(y, f, stage, p), stage.breakpoints.position[0] - y.position)
         first = jnp.where(
             phase == _CRUSHING, crushing, jnp.where(phase == _CONTACT, contact[0], free)
         )
@@ -692,7 +688,9 @@ def _transition(p: _Params, rtol):
         )
         # A segment of the contact ends on a breakpoint: the next starts.
         ahead = stage.breakpoints
-        on_breakpoint = in_contact & (ahead.position[0] - y.position < _contact_end(y, f, stage, p))
+        on_breakpoint = in_contact & (
+            ahead.position[0] - y.position < jnp.min(jnp.stack(_contact_end(y, f, stage, p)))
+        )
         pending = ahead.pop_and_push(y.position + y.s1, left)
         segment = eqx.tree_at(
             lambda s: (s.first, s.last, s.breakpoints),
