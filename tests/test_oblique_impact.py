@@ -7,8 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from barrierjax.hinge import normal_impact
 from barrierjax._solve.hermite import quintic_hermite
+from barrierjax.hinge import normal_impact, oblique
 from barrierjax.hinge.oblique import moving_load, oblique_impact
 
 # Light and moderate vehicles (mu <= 5); see the module's notes on heavy ones.
@@ -50,6 +50,32 @@ def test_hinges_meet_at_rest_and_vehicle_leaves(oblique_batch):
     assert np.all(np.asarray(r.exit_normal_speed) < 0.0)  # (3.3.3): theta V_H with theta < 0
     assert np.all(np.asarray(r.exit_angle_deg) > 0.0)
     assert np.all(np.asarray(r.max_deflection) >= np.asarray(r.w_final))
+
+
+def test_max_deflection_is_the_peak_of_the_final_shape(oblique_batch):
+    # The final shape on 16385 points spanning every plastic zone, from the same recorded
+    # steps: its peak lies between the load's first and last positions (where
+    # max_deflection looks for it), and max_deflection finds it.
+    r = oblique_batch
+    h = r.history
+    for i in range(len(OBLIQUE_CASES)):
+        n = int(h.n_saved[i])
+        samples = {
+            "time": h.time[i, :n],
+            "v0": h.v0[i, :n],
+            "s1": h.s1[i, :n],
+            "s2": h.s2[i, :n],
+            "position": h.contact_position[i, :n],
+        }
+        x = jnp.linspace(
+            float(jnp.min(samples["position"] - samples["s2"])),
+            float(jnp.max(samples["position"] + samples["s1"])),
+            16385,
+        )
+        shape = np.asarray(oblique._displacement_field(samples, jnp.asarray(n), x)[-1])
+        peak = int(np.argmax(shape))
+        assert 0.0 <= float(x[peak]) <= float(samples["position"][-1]) + float(x[1] - x[0])
+        assert float(r.max_deflection[i]) == pytest.approx(shape[peak], rel=1e-5)
 
 
 def _energy_imbalance(r, mu, phi):

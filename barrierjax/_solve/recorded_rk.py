@@ -190,66 +190,113 @@ class Solution(eqx.Module):
     derivative: PyTree[Float[Array, ""]]
     stage: PyTree
     recording: Recording
+    args: PyTree
     complete: Bool[Array, ""]  # every stage ended within the step budget
 
 
-def solve_recorded(
-    field: Callable,
-    y0,
-    stage,
-    recording: Recording,
-    *,
-    record: Callable,
-    event: Callable,
-    transition: Callable,
-    view: Callable,
-    max_step: Callable,
-    rtol: float,
-    atol: float,
-    h0,
-    max_steps: int,
-) -> Solution:
-    """Integrate the autonomous `field(y, stage, past)` from `y0` through the stages that
-    start with `stage`.
+class Carry(eqx.Module):
+    """The step loop's state between iterations."""
 
-    A stage lasts while every term of `event(y, f, stage)` (a vector, read from the state
-    and the field alone so that it can be located on an interpolant) is positive; where
-    the first falls to zero, `transition(y, f, stage, recording, past) -> (y, stage,
-    rescale, done)` gives the next stage, the state it starts from and the factor that
-    turns a step length in this stage's variable into one in the next's, or ends the
+    y: PyTree[Float[Array, ""]]
+    f: PyTree[Float[Array, ""]]  # the field at y
+    rate: PyTree[Float[Array, ""]]  # its derivative along the solution
+    h: Float[Array, ""]  # the next step's length
+    event: Float[Array, " terms"]  # the event's terms at y
+    recording: Recording
+    past: PyTree  # the view the last step took
+    stage: PyTree
+    args: PyTree
+    mode: Int[Array, ""]
+    iterations: Int[Array, ""]
+
+
+class RecordedRK(eqx.Module):
+    """The step loop: integrate the autonomous `field(y, stage, past, args)` through the
+    stages that start with `stage` (`start`, then `step` while `running`, or `solve`).
+
+    A stage lasts while every term of `event(y, f, stage, args)` (a vector, read from the
+    state and the field alone so that it can be located on an interpolant) is positive;
+    where the first falls to zero, `transition(y, f, stage, recording, past, args) -> (y,
+    stage, rescale, done)` gives the next stage, the state it starts from and the factor
+    that turns a step length in this stage's variable into one in the next's, or ends the
     solve. Each stage starts with a step of length zero, which evaluates its field; a
     stage whose event is not positive there ends after it.
 
     `past = view(y, stage, recording, previous)` is taken at the start of each step and
     serves every stage of it; `previous` is the last step's, or None at the start, so that
-    a view can be found from the one before. `record(y, f, rate, stage, past)` gives the
-    sample appended to `recording` after each accepted step (and at each stage's start and
-    end), with `f` the field there and `rate` its derivative along the solution;
-    `max_step(y, f, stage, past)` bounds the step, for example so that the stages never
-    read past what `past` holds. The budget `max_steps` counts every iteration; spending
-    it is flagged (`complete`), not raised: the caller decides (under `vmap`, for example,
-    which members' failures count).
+    a view can be found from the one before. `record(y, f, rate, stage, past, args)` gives
+    the sample appended to the recording after each accepted step (and at each stage's
+    start and end), with `f` the field there and `rate` its derivative along the solution;
+    `max_step(y, f, stage, past, args)` bounds the step, for example so that the stages
+    never read past what `past` holds. `args` are the solve's constants. The budget
+    `max_steps` counts every iteration; spending it is flagged (`Solution.complete`), not
+    raised: the caller decides (under `vmap`, for example, which members' failures count).
 
-    The loop carries the recording as an in-place buffer (`equinox.internal.while_loop`):
-    under `vmap`, lax's while loop would select every member's whole buffer at every step,
-    and the cost of a step would grow with the buffer's capacity.
+    The parts serve drivers that run many solves side by side (`_solve.queue`).
     """
 
-    def rate(vector, y, f):
-        # Only the entries `record` reads survive dead-code elimination.
-        return jax.jvp(vector, (y,), (f,))[1]
+    field: Callable
+    record: Callable
+    event: Callable
+    transition: Callable
+    view: Callable
+    max_step: Callable
+    rtol: float
+    atol: float
+    max_steps: int = eqx.field(static=True)
 
-    def body(carry):
-        y, f, r, h, e, rec, previous, stage, mode, iterations = carry
-        past = view(y, stage, rec, previous)
-        vector = lambda y: field(y, stage, past)
-        stepping = mode == _STEP
+    def start(self, y0, stage, recording: Recording, h0, args) -> Carry:
+        dtype = jnp.result_type(*jax.tree.leaves(y0))
+        n_events = jax.eval_shape(lambda: self.event(y0, y0, stage, args)).shape[0]
+        zeros = jax.tree.map(jnp.zeros_like, y0)
+        return Carry(
+            y=y0,
+            f=zeros,
+            rate=zeros,
+            h=jnp.asarray(h0, dtype),
+            event=jnp.ones(n_events, dtype),
+            recording=recording,
+            past=self.view(y0, stage, recording, None),
+            stage=stage,
+            args=args,
+            mode=jnp.asarray(_START),
+            iterations=jnp.zeros((), jnp.int32),
+        )
+
+    def solve(self, carry: Carry) -> Solution:
+        """Step from `carry` to the end. The loop carries the recording as an in-place
+        buffer (`equinox.internal.while_loop`): under `vmap`, lax's while loop would select
+        every member's whole buffer at every step, and the cost of a step would grow with
+        the buffer's capacity."""
+        carry = eqxi.while_loop(
+            self.running, self.step, carry, kind="lax", buffers=lambda c: c.recording.buffer
+        )
+        return self.solution(carry)
+
+    def running(self, carry: Carry):
+        return (carry.mode != _DONE) & (carry.iterations < self.max_steps)
+
+    def solution(self, carry: Carry) -> Solution:
+        return Solution(
+            carry.y, carry.f, carry.stage, carry.recording, carry.args, carry.mode == _DONE
+        )
+
+    def step(self, carry: Carry) -> Carry:
+        """One iteration: a step (accepted or not), or a stage's zero-length start. Writes
+        the recording's first free row whatever it does (`Recording.append`)."""
+        y, f, r, stage, args = carry.y, carry.f, carry.rate, carry.stage, carry.args
+        past = self.view(y, stage, carry.recording, carry.past)
+        vector = lambda y: self.field(y, stage, past, args)
+        stepping = carry.mode == _STEP
         # Step lengths are a discretisation choice: no derivative flows through them.
-        h_try = jax.lax.stop_gradient(jnp.minimum(h, max_step(y, f, stage, past)))
+        bound = self.max_step(y, f, stage, past, args)
+        h_try = jax.lax.stop_gradient(jnp.minimum(carry.h, bound))
         length = jnp.where(stepping, h_try, 0.0)
         y1, error, f1 = _step(vector, y, f, length)
-        r1, e1 = rate(vector, y1, f1), event(y1, f1, stage)
-        ratio = jax.lax.stop_gradient(_error_ratio(y, y1, error, rtol, atol))
+        # Only the entries `record` reads of the rate survive dead-code elimination.
+        r1 = jax.jvp(vector, (y1,), (f1,))[1]
+        e1 = self.event(y1, f1, stage, args)
+        ratio = jax.lax.stop_gradient(_error_ratio(y, y1, error, self.rtol, self.atol))
         # (A finite state whose field is not would carry a NaN into the next step length.)
         finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves((y1, f1))]))
         accept = (ratio <= 1.0) & finite
@@ -257,55 +304,36 @@ def solve_recorded(
         # A stage ending within a step ends on the step's interpolant; one ending at its
         # start ends there.
         located = _locate(
-            lambda y, f: event(y, f, stage),
+            lambda y, f: self.event(y, f, stage, args),
             (y, f, r),
             (y1, f1, r1),
-            e,
+            carry.event,
             e1,
             jnp.where(stepping, length, 1.0),
         )
         reached = jax.tree.map(
             lambda a, b: jnp.where(ended & stepping, a, b), located, (y1, f1, r1)
         )
-        rec = rec.append(record(*reached, stage, past), when=accept)
-        y_next, stage_next, rescale, done = transition(*reached[:2], stage, rec, past)
+        recording = carry.recording.append(self.record(*reached, stage, past, args), when=accept)
+        y_next, stage_next, rescale, done = self.transition(
+            *reached[:2], stage, recording, past, args
+        )
         keep = lambda new, old, when: jax.tree.map(lambda a, b: jnp.where(when, a, b), new, old)
         y_reached, f_reached, r_reached = reached
         factor = jnp.where(finite, jnp.clip(0.9 * ratio**-0.2, 0.2, 5.0), 0.2)
-        mode_next = jnp.where(ended, jnp.where(done, _DONE, _START), jnp.where(accept, _STEP, mode))
-        return (
-            keep(keep(y_next, y_reached, ended), y, accept),
-            keep(f_reached, f, accept),
-            keep(r_reached, r, accept),
-            jnp.where(stepping, h_try * factor, h) * jnp.where(ended, rescale, 1.0),
-            jnp.where(accept, e1, e),
-            rec,
-            past,
-            keep(stage_next, stage, ended),
-            mode_next,
-            iterations + 1,
+        mode = jnp.where(
+            ended, jnp.where(done, _DONE, _START), jnp.where(accept, _STEP, carry.mode)
         )
-
-    dtype = jnp.result_type(*jax.tree.leaves(y0))
-    n_events = jax.eval_shape(lambda: event(y0, y0, stage)).shape[0]
-    zeros = jax.tree.map(jnp.zeros_like, y0)
-    start = (
-        y0,
-        zeros,
-        zeros,
-        jnp.asarray(h0, dtype),
-        jnp.ones(n_events, dtype),
-        recording,
-        view(y0, stage, recording, None),
-        stage,
-        jnp.asarray(_START),
-        jnp.zeros((), jnp.int32),
-    )
-    y, f, _, _, _, recording, _, stage, mode, _ = eqxi.while_loop(
-        lambda carry: (carry[8] != _DONE) & (carry[9] < max_steps),
-        body,
-        start,
-        kind="lax",
-        buffers=lambda carry: carry[5].buffer,
-    )
-    return Solution(y, f, stage, recording, mode == _DONE)
+        return Carry(
+            y=keep(keep(y_next, y_reached, ended), y, accept),
+            f=keep(f_reached, f, accept),
+            rate=keep(r_reached, r, accept),
+            h=jnp.where(stepping, h_try * factor, carry.h) * jnp.where(ended, rescale, 1.0),
+            event=jnp.where(accept, e1, carry.event),
+            recording=recording,
+            past=past,
+            stage=keep(stage_next, stage, ended),
+            args=args,
+            mode=mode,
+            iterations=carry.iterations + 1,
+        )

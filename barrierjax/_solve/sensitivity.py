@@ -17,6 +17,11 @@ import numpy as np
 def forward_jacobian_jvp(fn, n_differentiable=None):
     """`fn(*scalars) -> PyTree` with a custom JVP built from its forward Jacobian.
 
+    `fn` may also take arrays of one shape holding independent problems, each output's
+    leading axes that shape: the Jacobian is then taken problem by problem (each
+    direction perturbs one parameter of every problem), and one forward solve of the
+    whole batch carries the tangents.
+
     The primal is computed once, alongside all the directional derivatives (a `vmap` of
     `jax.jvp` over the unit directions), so every derivative costs one forward solve that
     carries `n_differentiable` tangents. Only the first `n_differentiable` arguments
@@ -35,14 +40,16 @@ def forward_jacobian_jvp(fn, n_differentiable=None):
         basis = jnp.eye(n, dtype=jnp.result_type(*inputs))
 
         def along(direction):
-            return jax.jvp(lambda *x: fn(*x, *fixed), inputs, tuple(direction))
+            per_problem = tuple(d * jnp.ones_like(x) for d, x in zip(direction, inputs))
+            return jax.jvp(lambda *x: fn(*x, *fixed), inputs, per_problem)
 
         out, jacobian = jax.vmap(along, out_axes=(None, 0))(basis)
         tangent = jnp.stack(tangents[:n])
 
         def along_tangent(j, o):
             if jnp.issubdtype(o.dtype, jnp.inexact):
-                return jnp.tensordot(tangent, j, axes=1)
+                weights = tangent.reshape(tangent.shape + (1,) * (j.ndim - tangent.ndim))
+                return jnp.sum(weights * j, axis=0)
             return np.zeros(o.shape, jax.dtypes.float0)  # counts and flags
 
         return out, jax.tree.map(along_tangent, jacobian, out)

@@ -70,9 +70,16 @@ Where the model stops with an error rather than an answer:
   `_solve.recorded_rk` would remove this).
 
 Derivatives: the contact phase runs in segments between the breakpoints of Psi' (see
-`_transition`), so that they match finite differences; `max_deflection`
-integrates the velocity field over the recorded steps by the trapezoidal rule on 129
-points (error O(step^2)).
+`_transition`), so that they match finite differences.
+
+`max_deflection` integrates the velocity field over the recorded steps by the trapezoidal
+rule (error O(step^2): about 2e-3 relative at rtol 1e-6) between the load's first and last
+positions, where the peak lies, on grids zooming in on it (`_max_deflection`: within 4e-6
+of the peak on 16385 points over every plastic zone; a single grid of 129 points over
+every plastic zone was up to 1.5e-2 off).
+
+Arrays of scenarios run in lanes refilled from a queue (`_solve.queue`): under a plain
+`vmap`, every member would step until the slowest is done.
 """
 
 import functools
@@ -85,9 +92,9 @@ from jaxtyping import Array, Bool, Float, Int
 
 from .. import _checks
 from .._custom_types import Scalar
-from .._solve.batching import sorted_chunks
 from .._solve.hermite import quintic_hermite
-from .._solve.recorded_rk import Recording, solve_recorded
+from .._solve.queue import solve_queued
+from .._solve.recorded_rk import Carry, RecordedRK, Recording, Solution
 from .._solve.sensitivity import forward_jacobian_jvp
 
 # --------------------------------------------------------------------------------------
@@ -306,10 +313,14 @@ def _slope_memory(past: _Past, x, s_star):
 
 
 class _Params(eqx.Module):
+    """The solve's constants (the step loop's `args`)."""
+
     mu: Scalar
     phi: Scalar
     friction: Scalar
     s_star: Scalar
+    rtol: Scalar
+    t_end: Scalar  # the moving load's end time; unused otherwise
     moving_load: bool = eqx.field(static=True, default=False)
 
 
@@ -456,52 +467,48 @@ def _force(y: _State, f: _State):
     return (f.speed + 1.5 / (y.s1 * y.s2) + 0.5) * (y.s1 + y.s2) / 4.0
 
 
-def _field(p: _Params):
+def _field(y: _State, stage: _Stage, past: _Past, p: _Params) -> _State:
     """The state's rate, (3.3.16), with the force of the phase: phi while the vehicle
     crushes, (3.3.22)'s in contact, none once it has left (the load then stands still
     and the memory is not read)."""
     vehicle = 0.0 if p.moving_load else 1.0
-
-    def field(y: _State, stage: _Stage, past: _Past) -> _State:
-        crushing, free = stage.phase == _CRUSHING, stage.phase == _FREE
-        v0 = _v0(y, stage)
-        per_time = jnp.where(crushing, 1.0, v0)  # dT per unit of the phase's variable
-        vh = jnp.maximum(y.vehicle_tangential, 0.0)
-        psi, curvature = _slope_memory(past, y.position, p.s_star)
-        theta = jnp.where(free, 0.0, psi - y.rotation)
-        force = jnp.where(
-            crushing, p.phi, jnp.where(free, 0.0, _contact_force(y, v0, curvature, theta, p))
-        )
-        load_speed = jnp.where(free, 0.0, vh)
-        contact_velocity = v0 + theta * load_speed
-        g1, g2 = _hinge_terms(y.s1, y.s2, force)
-        backing, hinge = _beam_powers(v0, y.s1, y.s2)
-        # V0 S' = g_i, against T or s.
-        per_v0 = jnp.where(crushing, 1.0 / v0, 1.0)
-        rates_in_time = _State(
-            speed=jnp.zeros_like(v0),
-            s1=-1.5 * load_speed,
-            s2=1.5 * load_speed,
-            time=jnp.ones_like(v0),
-            position=load_speed,
-            rotation=v0 / y.s1,
-            vehicle_normal=jnp.where(crushing, -vehicle * force / p.mu, 0.0),
-            vehicle_tangential=-vehicle * _sliding_friction(vh, p) * force / p.mu,
-            crush=jnp.where(crushing, vehicle * (y.vehicle_normal - contact_velocity), 0.0),
-            contact_displacement=contact_velocity,
-            backing_work=backing,
-            hinge_work=hinge,
-            friction_work=p.friction * force * vh,
-            slope_work=force * theta * load_speed,
-        )
-        rates = jax.tree.map(lambda r: per_time * r, rates_in_time)
-        return eqx.tree_at(
-            lambda r: (r.speed, r.s1, r.s2),
-            rates,
-            (_acceleration(y.s1, y.s2, force), rates.s1 + per_v0 * g1, rates.s2 + per_v0 * g2),
-        )
-
-    return field
+    crushing, free = stage.phase == _CRUSHING, stage.phase == _FREE
+    v0 = _v0(y, stage)
+    per_time = jnp.where(crushing, 1.0, v0)  # dT per unit of the phase's variable
+    vh = jnp.maximum(y.vehicle_tangential, 0.0)
+    psi, curvature = _slope_memory(past, y.position, p.s_star)
+    theta = jnp.where(free, 0.0, psi - y.rotation)
+    force = jnp.where(
+        crushing, p.phi, jnp.where(free, 0.0, _contact_force(y, v0, curvature, theta, p))
+    )
+    load_speed = jnp.where(free, 0.0, vh)
+    contact_velocity = v0 + theta * load_speed
+    g1, g2 = _hinge_terms(y.s1, y.s2, force)
+    backing, hinge = _beam_powers(v0, y.s1, y.s2)
+    # V0 S' = g_i, against T or s.
+    per_v0 = jnp.where(crushing, 1.0 / v0, 1.0)
+    rates_in_time = _State(
+        speed=jnp.zeros_like(v0),
+        s1=-1.5 * load_speed,
+        s2=1.5 * load_speed,
+        time=jnp.ones_like(v0),
+        position=load_speed,
+        rotation=v0 / y.s1,
+        vehicle_normal=jnp.where(crushing, -vehicle * force / p.mu, 0.0),
+        vehicle_tangential=-vehicle * _sliding_friction(vh, p) * force / p.mu,
+        crush=jnp.where(crushing, vehicle * (y.vehicle_normal - contact_velocity), 0.0),
+        contact_displacement=contact_velocity,
+        backing_work=backing,
+        hinge_work=hinge,
+        friction_work=p.friction * force * vh,
+        slope_work=force * theta * load_speed,
+    )
+    rates = jax.tree.map(lambda r: per_time * r, rates_in_time)
+    return eqx.tree_at(
+        lambda r: (r.speed, r.s1, r.s2),
+        rates,
+        (_acceleration(y.s1, y.s2, force), rates.s1 + per_v0 * g1, rates.s2 + per_v0 * g2),
+    )
 
 
 # --------------------------------------------------------------------------------------
@@ -548,27 +555,26 @@ def _slope(y: _State, p: _Params, past: _Past):
     return _slope_memory(past, y.position, p.s_star)[0] - y.rotation
 
 
-def _record(p: _Params):
-    def record(y: _State, f: _State, rate: _State, stage: _Stage, past: _Past):
-        v0 = _v0(y, stage)
-        crushing, contact = stage.phase == _CRUSHING, stage.phase == _CONTACT
-        force = jnp.where(crushing, p.phi, jnp.where(contact, _force(y, f), 0.0))
-        theta = jnp.where(crushing | contact, _slope(y, p, past), 0.0)
-        # In contact the vehicle moves with the load point: V0 + theta V_H.
-        vh = jnp.maximum(y.vehicle_tangential, 0.0)
-        vehicle_normal = jnp.where(contact, v0 + theta * vh, y.vehicle_normal)
-        return _sample(
-            jnp.asarray(stage.phase, v0.dtype),
-            v0,
-            f,
-            rate,
-            y,
-            vehicle_normal=vehicle_normal,
-            force=force,
-            slope=theta,
-        )
-
-    return record
+def _record(y: _State, f: _State, rate: _State, stage: _Stage, past: _Past, p: _Params):
+    """The sample recorded after a step: `_sample`'s, with the phase's vehicle velocity,
+    force and slope."""
+    v0 = _v0(y, stage)
+    crushing, contact = stage.phase == _CRUSHING, stage.phase == _CONTACT
+    force = jnp.where(crushing, p.phi, jnp.where(contact, _force(y, f), 0.0))
+    theta = jnp.where(crushing | contact, _slope(y, p, past), 0.0)
+    # In contact the vehicle moves with the load point: V0 + theta V_H.
+    vh = jnp.maximum(y.vehicle_tangential, 0.0)
+    vehicle_normal = jnp.where(contact, v0 + theta * vh, y.vehicle_normal)
+    return _sample(
+        jnp.asarray(stage.phase, v0.dtype),
+        v0,
+        f,
+        rate,
+        y,
+        vehicle_normal=vehicle_normal,
+        force=force,
+        slope=theta,
+    )
 
 
 # What the recording keeps: the right hinge's trace for the memory, the motion for the
@@ -626,29 +632,23 @@ def _contact_end(y: _State, f: _State, stage: _Stage, p: _Params):
     )
 
 
-def _event(p: _Params, t_end):
+def _event(y: _State, f: _State, stage: _Stage, p: _Params):
     """The terms whose first zero ends the stage: the crushing phase's (the vehicle
     stops crushing where its velocity is the load point's; the moving load's at t_end),
     the contact's (`_contact_end`, and the next breakpoint) or the free phase's."""
-
-    def event(y: _State, f: _State, stage: _Stage):
-        phase = stage.phase
-        if p.moving_load:
-            crushing = t_end - y.time
-        else:
-            crushing = y.vehicle_normal - f.contact_displacement
-        free = y.speed - stage.log_rest
-        contact = (*_contact_end(y, f, stage, p), stage.breakpoints.position[0] - y.position)
-        first = jnp.where(
-            phase == _CRUSHING, crushing, jnp.where(phase == _CONTACT, contact[0], free)
-        )
-        rest = [jnp.where(phase == _CONTACT, term, jnp.inf) for term in contact[1:]]
-        return jnp.stack([first, *rest])
-
-    return event
+    phase = stage.phase
+    if p.moving_load:
+        crushing = p.t_end - y.time
+    else:
+        crushing = y.vehicle_normal - f.contact_displacement
+    free = y.speed - stage.log_rest
+    contact = (*_contact_end(y, f, stage, p), stage.breakpoints.position[0] - y.position)
+    first = jnp.where(phase == _CRUSHING, crushing, jnp.where(phase == _CONTACT, contact[0], free))
+    rest = [jnp.where(phase == _CONTACT, term, jnp.inf) for term in contact[1:]]
+    return jnp.stack([first, *rest])
 
 
-def _transition(p: _Params, rtol):
+def _transition(y: _State, f: _State, stage: _Stage, recording: Recording, past: _Past, p: _Params):
     """What follows the end of a stage.
 
     The contact phase runs in segments between the breakpoints of the deposited
@@ -667,68 +667,64 @@ def _transition(p: _Params, rtol):
     After the contact: the free phase if the vehicle separated, or the end. The state's
     `vehicle_normal` then holds the exit velocity: the load point's at separation, (3.3.3)
     with V0 = 0 (theta V_H) at rest in contact."""
-
-    def transition(y: _State, f: _State, stage: _Stage, recording: Recording, past: _Past):
-        left = recording.count - 1  # this stage's last sample
-        if p.moving_load:
-            return y, stage, 1.0, jnp.asarray(True)
-        crushing, in_contact = stage.phase == _CRUSHING, stage.phase == _CONTACT
-        v0 = _v0(y, stage)
-        # The crushing phase ends: the contact, against s, starts.
-        breakpoints = _Breakpoints.at_contact(y, p.s_star, left)
-        contact = _Stage(
-            phase=jnp.asarray(_CONTACT),
-            first=jnp.zeros_like(left),
-            last=breakpoints.left[0],
-            breakpoints=breakpoints,
-            log_rest=jnp.log(v0) + jnp.log(rtol) - 3.0,
-            t_star=y.time,
-            separated=stage.separated,
-            overtaken=stage.overtaken,
-        )
-        # A segment of the contact ends on a breakpoint: the next starts.
-        ahead = stage.breakpoints
-        on_breakpoint = in_contact & (
-            ahead.position[0] - y.position < jnp.min(jnp.stack(_contact_end(y, f, stage, p)))
-        )
-        pending = ahead.pop_and_push(y.position + y.s1, left)
-        segment = eqx.tree_at(
-            lambda s: (s.first, s.last, s.breakpoints),
-            stage,
-            (ahead.right[0], pending.left[0], pending),
-        )
-        # The contact ends: the free phase follows a separation.
-        separated = _force(y, f) / p.phi < y.speed - stage.log_rest
-        overtaken = y.s1 / p.s_star < 2.0 * _OVERTAKEN
-        ended = eqx.tree_at(
-            lambda s: (s.phase, s.separated, s.overtaken),
-            stage,
-            (jnp.where(separated, _FREE, _CONTACT), separated, overtaken),
-        )
-        contact_ends = in_contact & ~on_breakpoint
-        exit_normal = jnp.where(separated, v0, 0.0) + _slope(y, p, past) * jnp.maximum(
-            y.vehicle_tangential, 0.0
-        )
-        y = eqx.tree_at(
-            lambda y: (y.speed, y.vehicle_normal),
-            y,
-            (
-                jnp.where(crushing, jnp.log(v0), y.speed),
-                jnp.where(contact_ends, exit_normal, y.vehicle_normal),
-            ),
-        )
-        pick = lambda when, a, b: jax.tree.map(lambda x, z: jnp.where(when, x, z), a, b)
-        stage_next = pick(crushing, contact, pick(on_breakpoint, segment, ended))
-        done = (contact_ends & (~separated | overtaken)) | (stage.phase == _FREE)
-        # A step of dT from the crushing phase is one of dT / V0 in s; a phase or a segment
-        # starts with a fraction of the last step (`_RESTART`).
-        restart = jnp.where(crushing | on_breakpoint, _RESTART, 1.0)
-        return y, stage_next, restart * jnp.where(crushing, 1.0 / v0, 1.0), done
-
-    return transition
+    left = recording.count - 1  # this stage's last sample
+    if p.moving_load:
+        return y, stage, 1.0, jnp.asarray(True)
+    crushing, in_contact = stage.phase == _CRUSHING, stage.phase == _CONTACT
+    v0 = _v0(y, stage)
+    # The crushing phase ends: the contact, against s, starts.
+    breakpoints = _Breakpoints.at_contact(y, p.s_star, left)
+    contact = _Stage(
+        phase=jnp.asarray(_CONTACT),
+        first=jnp.zeros_like(left),
+        last=breakpoints.left[0],
+        breakpoints=breakpoints,
+        log_rest=jnp.log(v0) + jnp.log(p.rtol) - 3.0,
+        t_star=y.time,
+        separated=stage.separated,
+        overtaken=stage.overtaken,
+    )
+    # A segment of the contact ends on a breakpoint: the next starts.
+    ahead = stage.breakpoints
+    on_breakpoint = in_contact & (
+        ahead.position[0] - y.position < jnp.min(jnp.stack(_contact_end(y, f, stage, p)))
+    )
+    pending = ahead.pop_and_push(y.position + y.s1, left)
+    segment = eqx.tree_at(
+        lambda s: (s.first, s.last, s.breakpoints),
+        stage,
+        (ahead.right[0], pending.left[0], pending),
+    )
+    # The contact ends: the free phase follows a separation.
+    separated = _force(y, f) / p.phi < y.speed - stage.log_rest
+    overtaken = y.s1 / p.s_star < 2.0 * _OVERTAKEN
+    ended = eqx.tree_at(
+        lambda s: (s.phase, s.separated, s.overtaken),
+        stage,
+        (jnp.where(separated, _FREE, _CONTACT), separated, overtaken),
+    )
+    contact_ends = in_contact & ~on_breakpoint
+    exit_normal = jnp.where(separated, v0, 0.0) + _slope(y, p, past) * jnp.maximum(
+        y.vehicle_tangential, 0.0
+    )
+    y = eqx.tree_at(
+        lambda y: (y.speed, y.vehicle_normal),
+        y,
+        (
+            jnp.where(crushing, jnp.log(v0), y.speed),
+            jnp.where(contact_ends, exit_normal, y.vehicle_normal),
+        ),
+    )
+    pick = lambda when, a, b: jax.tree.map(lambda x, z: jnp.where(when, x, z), a, b)
+    stage_next = pick(crushing, contact, pick(on_breakpoint, segment, ended))
+    done = (contact_ends & (~separated | overtaken)) | (stage.phase == _FREE)
+    # A step of dT from the crushing phase is one of dT / V0 in s; a phase or a segment
+    # starts with a fraction of the last step (`_RESTART`).
+    restart = jnp.where(crushing | on_breakpoint, _RESTART, 1.0)
+    return y, stage_next, restart * jnp.where(crushing, 1.0 / v0, 1.0), done
 
 
-def _max_step(y: _State, f: _State, stage: _Stage, past: _Past):
+def _max_step(y: _State, f: _State, stage: _Stage, past: _Past, p: _Params):
     """At most `_EFOLDS_PER_STEP` e-folds of V0; the load's position kept within the step's
     window of the hinge's trace (at most half the gap to the window's reach); and a step
     reaching the next breakpoint passes it by little: the stage ends on the step's
@@ -748,17 +744,34 @@ def _max_step(y: _State, f: _State, stage: _Stage, past: _Past):
 _PAST_BREAKPOINT = 1.01
 
 
-def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
-    """All phases in the speed-free dimensionless variables. With `t_end`, the moving
-    load: phase 1 alone with no vehicle, to T = t_end."""
+def _loop(rtol, max_steps) -> RecordedRK:
+    return RecordedRK(
+        field=_field,
+        record=_record,
+        event=_event,
+        transition=_transition,
+        view=_past,
+        max_step=_max_step,
+        rtol=rtol,
+        atol=1e-3 * rtol,
+        max_steps=max_steps,
+    )
+
+
+def _start(loop: RecordedRK, mu, phi, vn, vh, friction, *, history, t_end=None) -> Carry:
+    """The step loop's start, all phases in the speed-free dimensionless variables. With
+    `t_end`, the moving load: phase 1 alone with no vehicle, to T = t_end."""
     dtype = jnp.result_type(mu)
     zero = jnp.zeros((), dtype)
     root = jnp.sqrt(phi**2 + 3.0)
     s_star = 3.0 / (root + phi)
     moving_load = t_end is not None
-    p = _Params(mu, phi, friction, s_star, moving_load=moving_load)
+    rtol = zero + loop.rtol
+    p = _Params(
+        mu, phi, friction, s_star, rtol, zero + (t_end if moving_load else 0.0), moving_load
+    )
     # One row per iteration, and one at T = 0.
-    capacity = max_steps + 8
+    capacity = loop.max_steps + 8
     recording = _empty_recording(capacity, dtype, history)
     a = _acceleration(s_star, s_star, phi)
     time_scale = t_end if moving_load else 1.0 / (a + phi / mu)
@@ -802,39 +815,39 @@ def _solve(mu, phi, vn, vh, friction, *, rtol, max_steps, history, t_end=None):
         separated=jnp.asarray(False),
         overtaken=jnp.asarray(False),
     )
-    solution = solve_recorded(
-        _field(p),
-        y0,
-        crushing,
-        recording,
-        record=_record(p),
-        event=_event(p, t_end),
-        transition=_transition(p, rtol),
-        view=_past,
-        max_step=_max_step,
-        rtol=rtol,
-        atol=1e-3 * rtol,
-        h0=t_start,
-        max_steps=max_steps,
-    )
-    stage, y = solution.stage, solution.y
+    return loop.start(y0, crushing, recording, t_start, p)
+
+
+class _Outcome(eqx.Module):
+    """How a solve ended, for `_raise_failures`."""
+
+    complete: Bool[Array, ""]
+    phase: Int[Array, ""]
+    overtaken: Bool[Array, ""]
+
+
+def _outcome(solution: Solution) -> _Outcome:
+    return _Outcome(solution.complete, solution.stage.phase, solution.stage.overtaken)
+
+
+def _raise_failures(value, outcome: _Outcome, moving_load=False):
+    """`value`, or an error where any solve failed (`_Outcome`)."""
     phases = {_CRUSHING: "moving load" if moving_load else "crushing phase"}
     phases |= {_CONTACT: "contact phase", _FREE: "free phase"}
     for phase, name in phases.items():
-        y = eqx.error_if(
-            y,
-            ~solution.complete & (stage.phase == phase),
+        value = eqx.error_if(
+            value,
+            ~outcome.complete & (outcome.phase == phase),
             f"{name}: the step budget (max_steps) was spent before the phase ended: raise "
             "max_steps",
         )
-    y = eqx.error_if(
-        y,
-        stage.overtaken,
+    return eqx.error_if(
+        value,
+        outcome.overtaken,
         "the load caught up with the hinge ahead of it (S1 -> 0) in the contact phase: the "
         "vehicle slides faster than the barrier's plastic zone can run ahead, outside the "
         "three-hinge mechanism of report 3.3",
     )
-    return p, eqx.tree_at(lambda s: s.y, solution, y)
 
 
 def _rest(y: _State, f: _State, in_contact):
@@ -889,6 +902,27 @@ def _final_displacement(recording: Recording, x):
     return w
 
 
+def _max_deflection(recording: Recording, final_position, w_final):
+    """max over x of W(x) at rest. It lies between the load's first and last positions, 0
+    and F_end: ahead of F_end every point has been ahead of the load throughout, where the
+    velocity falls with x at every time, and behind 0 behind it, where it rises with x.
+    The best of `_N_MAX` points of [0, F_end], then of as many between the best one's
+    neighbours, `_ZOOMS` times; at least w_final, W(F_end), which the solve integrated
+    exactly. (No parabola through the last three: W may have a kink at its peak, where a
+    hinge stood, and the parabola overshoots it.)"""
+    lo, hi = jnp.zeros_like(final_position), final_position
+    for _ in range(_ZOOMS):
+        x = jnp.linspace(lo, hi, _N_MAX)
+        w = _final_displacement(recording, x)
+        k = jnp.argmax(w)
+        lo, hi = x[jnp.maximum(k - 1, 0)], x[jnp.minimum(k + 1, _N_MAX - 1)]
+    return jnp.maximum(jnp.max(w), w_final)
+
+
+# `_max_deflection`'s grids: each of this many points spans two intervals of the last.
+_N_MAX, _ZOOMS = 17, 3
+
+
 def _padded(samples, count):
     """Repeat the last recorded sample over the unfilled tail."""
     index = jnp.minimum(
@@ -934,20 +968,17 @@ def _history(samples, count, p: _Params, x, displacement):
     )
 
 
-def _oblique(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x):
-    p, solution = _solve(mu, phi, vn, vh, friction, rtol=rtol, max_steps=max_steps, history=history)
-    y, f, stage = solution.y, solution.derivative, solution.stage
+def _finish(solution: Solution, *, history, n_x) -> tuple[ObliqueImpact, _Outcome]:
+    """The results of a solve, and how it ended."""
+    y, f, stage, p = solution.y, solution.derivative, solution.stage, solution.args
     remaining, extra = _rest(y, f, ~stage.separated)
     recording = solution.recording
-    x = _grid(recording.samples, recording.count, n_x)
     hist = None
     if history:
+        x = _grid(recording.samples, recording.count, n_x)
         samples = _padded(recording.samples, recording.count)
         displacement = _displacement_field(samples, recording.count, x)
-        final_displacement = displacement[-1]
         hist = _history(samples, recording.count, p, x, displacement)
-    else:
-        final_displacement = _final_displacement(recording, x)
     w_final = y.contact_displacement + extra
     t_final = y.time + remaining
     # (Friction may have stopped the slide within the last step: no negative overshoot.)
@@ -958,19 +989,19 @@ def _oblique(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x):
         s1_final=y.s1,
         s2_final=y.s2,
         w_final=w_final,
-        max_deflection=jnp.maximum(jnp.max(final_displacement), w_final),
+        max_deflection=_max_deflection(recording, y.position, w_final),
         damage=y.crush,
         exit_normal_speed=y.vehicle_normal,
         exit_tangential_speed=exit_tangential,
         exit_angle_deg=jnp.degrees(jnp.arctan2(-y.vehicle_normal, exit_tangential)),
         separated=stage.separated.astype(t_final.dtype),
-        crush_work=phi * y.crush,
+        crush_work=p.phi * y.crush,
         backing_work=y.backing_work,
         hinge_work=y.hinge_work,
         friction_work=y.friction_work,
         slope_work=y.slope_work,
         history=hist,
-    )
+    ), _outcome(solution)
 
 
 # --------------------------------------------------------------------------------------
@@ -1027,30 +1058,40 @@ def oblique_impact(
     options = {"max_steps": int(max_steps), "history": bool(history), "n_x": _N_X}
     rtol = jnp.asarray(rtol, args[0].dtype)
     if args[0].ndim == 0:
-        return _oblique_chunked(*args, rtol, **options)
-    flat = _oblique_chunked(*(a.ravel() for a in args), rtol, **options)
+        return _oblique_solved(*args, rtol, **options)
+    flat = _oblique_solved(*(a.ravel() for a in args), rtol, **options)
     return jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), flat)
 
 
-# Array inputs are solved in vmapped chunks of this many scenarios: every member of a
-# vmapped solve steps until the slowest is done, and a chunk's recordings stay in cache.
-# With a loop per phase, chunks of 128 to 1024 cost the same (243-246 us per scenario on
-# 1024 random scenarios of benchmarks/oblique_impact.py's box, rtol 1e-6): larger chunks
-# wait longer on their slowest member and pay less per kernel launch. With the single
-# loop, on 2048 such scenarios, a member needs 53 iterations on average and pays 92 in
-# chunks of 128, 104 in chunks of 512 (sorted by mass ratio).
-_CHUNK = 128
+# Array inputs are solved in this many vmapped lanes, each taking the next scenario as soon
+# as its own is done (`_solve.queue`), finished and refilled this many at a time.
+_LANES, _REFILL = 256, 32
 
 
 @functools.partial(jax.jit, static_argnames=("max_steps", "history", "n_x"))
-def _oblique_chunked(mu, phi, vn, vh, friction, rtol, **options):
-    solve = forward_jacobian_jvp(functools.partial(_oblique, **options), n_differentiable=5)
-    if mu.ndim == 0:
-        return solve(mu, phi, vn, vh, friction, rtol)
-    # The step count grows with the mass ratio (correlation 0.8 in log over the benchmark's
-    # box): chunks of similar mass ratios wait less on their slowest member: 92 iterations
-    # paid per member sorted, 130 unsorted (2048 random scenarios, chunks of 128).
-    return sorted_chunks(lambda *x: solve(*x, rtol), (mu, phi, vn, vh, friction), mu, _CHUNK)
+def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x):
+    def solve(*inputs_and_rtol):
+        *inputs, rtol = inputs_and_rtol
+        loop = _loop(rtol, max_steps)
+        start = lambda x: _start(loop, *x, history=history)
+        results = functools.partial(_finish, history=history, n_x=n_x)
+        if mu.ndim == 0:
+            return results(loop.solve(start(inputs)))
+        return solve_queued(
+            start,
+            loop.step,
+            loop.running,
+            lambda carry: results(loop.solution(carry)),
+            tuple(inputs),
+            buffers=lambda carry: carry.recording.buffer,
+            seed_rows=1,
+            lanes=_LANES,
+            refill=_REFILL,
+        )
+
+    solve = forward_jacobian_jvp(solve, n_differentiable=5)
+    result, outcome = solve(mu, phi, vn, vh, friction, rtol)
+    return _raise_failures(result, outcome)
 
 
 def moving_load(
@@ -1073,10 +1114,9 @@ def moving_load(
 @functools.partial(jax.jit, static_argnames=("max_steps",))
 def _moving_load(phi, vh, t_end, rtol, *, max_steps):
     def solve(phi, vh, t_end, rtol):
+        loop = _loop(rtol, max_steps)
         one = jnp.ones_like(phi)
-        p, solution = _solve(
-            one, phi, one, vh, 0.0 * one, rtol=rtol, max_steps=max_steps, history=True, t_end=t_end
-        )
+        solution = loop.solve(_start(loop, one, phi, one, vh, 0.0 * one, history=True, t_end=t_end))
         recording, y = solution.recording, solution.y
         samples = _padded(recording.samples, recording.count)
         x = _grid(samples, recording.count, _N_X)
@@ -1085,10 +1125,11 @@ def _moving_load(phi, vh, t_end, rtol, *, max_steps):
             s1=y.s1,
             s2=y.s2,
             v0=y.speed,
-            history=_history(samples, recording.count, p, x, displacement),
-        )
+            history=_history(samples, recording.count, solution.args, x, displacement),
+        ), _outcome(solution)
 
     solve = forward_jacobian_jvp(solve, n_differentiable=3)
     for _ in range(phi.ndim):
         solve = jax.vmap(solve, in_axes=(0, 0, 0, None))
-    return solve(phi, vh, t_end, rtol)
+    result, outcome = solve(phi, vh, t_end, rtol)
+    return _raise_failures(result, outcome, moving_load=True)

@@ -1,0 +1,114 @@
+"""Many adaptive solves of different lengths, side by side in the lanes of one `vmap`,
+each lane taking the next problem of a queue as soon as its own is done.
+
+A vmapped adaptive solve steps until its slowest member is done: in chunks, every member
+pays for the chunk's slowest. Here a finished lane waits only until `refill` lanes have
+finished (so that finishing and restarting, a pass of their own, run for several lanes at
+once), and then takes a new problem; only the queue's last lanes wait for the slowest.
+"""
+
+from collections.abc import Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+
+def solve_queued(
+    start: Callable,
+    step: Callable,
+    running: Callable,
+    finish: Callable,
+    inputs,
+    *,
+    buffers: Callable,
+    seed_rows: int,
+    lanes: int,
+    refill: int,
+):
+    """`finish(c)` for each problem `x` along the leading axis of `inputs`, where `c` is
+    `start(x)` stepped by `step` while `running(c)`.
+
+    `buffers(c)` are the leaves of the state that a step writes in place (arrays whose
+    leading axis is a capacity): `step` may write them even for a state that is not
+    running (the driver keeps the state's other leaves), and `start` fills only their
+    first `seed_rows` rows (the rest are never read before a step writes them), so that a
+    refill copies no more. `lanes` problems run at once; finished lanes are finished and
+    refilled `refill` at a time, or all together once none is running."""
+    n = jax.tree.leaves(inputs)[0].shape[0]
+    lanes = min(lanes, n)
+    refill = min(refill, lanes)
+    take = lambda tree, index: jax.tree.map(lambda a: a[index], tree)
+    lanes_running = jax.vmap(running)
+
+    carry = jax.vmap(start)(take(inputs, jnp.arange(lanes)))
+    owner = jnp.arange(lanes)  # the problem in each lane; n: none
+    results = jax.tree.map(
+        lambda leaf: jnp.zeros((n, *leaf.shape), leaf.dtype),
+        jax.eval_shape(lambda: finish(start(take(inputs, 0)))),
+    )
+
+    def without_buffers(c):
+        return eqx.tree_at(buffers, c, replace_fn=lambda _: None)
+
+    def advance(carry, owner):
+        active = lanes_running(carry) & (owner < n)
+        stepped = jax.vmap(step)(carry)
+        kept = jax.tree.map(
+            lambda new, old: jnp.where(active.reshape((-1,) + (1,) * (new.ndim - 1)), new, old),
+            without_buffers(stepped),
+            without_buffers(carry),
+        )
+        return eqx.tree_at(buffers, kept, buffers(stepped))
+
+    def finished_and_fresh(carry, owner, queued):
+        """The results of up to `refill` finished lanes and the starts of the problems
+        that take their place: small arrays only, so that the conditional that computes
+        them copies neither the lanes' buffers nor the results."""
+        finished = ~lanes_running(carry) & (owner < n)
+        lane = jnp.nonzero(finished, size=refill, fill_value=lanes)[0]
+        valid = lane < lanes
+        lane_in = jnp.minimum(lane, lanes - 1)
+        problem = jnp.where(valid, owner[lane_in], n)
+        following = queued + jnp.cumsum(valid) - 1
+        fresh = jax.vmap(start)(take(inputs, jnp.minimum(following, n - 1)))
+        seeds = jax.tree.map(lambda b: b[:, :seed_rows], buffers(fresh))
+        return (
+            problem,
+            jax.vmap(finish)(take(carry, lane_in)),
+            jnp.where(valid, lane, lanes),
+            jnp.where(following < n, following, n),
+            without_buffers(fresh),
+            seeds,
+        )
+
+    def none_finished(carry, owner, queued):
+        shapes = jax.eval_shape(finished_and_fresh, carry, owner, queued)
+        nothing = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
+        return (jnp.full(refill, n), nothing[1], jnp.full(refill, lanes), *nothing[3:])
+
+    def body(state):
+        carry, owner, queued, results = state
+        carry = advance(carry, owner)
+        busy = lanes_running(carry) & (owner < n)
+        due = (jnp.sum(~busy & (owner < n)) >= refill) | ~jnp.any(busy)
+        problem, done, lane, following, fresh, seeds = jax.lax.cond(
+            due, finished_and_fresh, none_finished, carry, owner, queued
+        )
+        # Out-of-range indices (no lane, no problem) are dropped.
+        results = jax.tree.map(lambda r, d: r.at[problem].set(d, mode="drop"), results, done)
+        small = jax.tree.map(
+            lambda old, new: old.at[lane].set(new, mode="drop"), without_buffers(carry), fresh
+        )
+        seeded = jax.tree.map(
+            lambda old, new: old.at[lane, :seed_rows].set(new, mode="drop"),
+            buffers(carry),
+            seeds,
+        )
+        owner = owner.at[lane].set(following, mode="drop")
+        queued = jnp.minimum(queued + jnp.sum(lane < lanes), n)
+        return eqx.tree_at(buffers, small, seeded), owner, queued, results
+
+    state = (carry, owner, jnp.asarray(lanes), results)
+    _, _, _, results = jax.lax.while_loop(lambda s: jnp.any(s[1] < n), body, state)
+    return results
