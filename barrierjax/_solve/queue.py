@@ -26,15 +26,17 @@ def solve_queued(
     lanes: int,
     refill: int,
 ):
-    """`finish(c)` for each problem `x` along the leading axis of `inputs`, where `c` is
-    `start(x)` stepped by `step` while `running(c)`.
+    """`finish(c, lane)` for each problem `x` along the leading axis of `inputs`, where `c`
+    is `start(x)` stepped by `step` while `running(c)` in lane `lane`.
 
     `buffers(c)` are the leaves of the state that a step writes in place (arrays whose
     leading axis is a capacity): `step` may write them even for a state that is not
     running (the driver keeps the state's other leaves), and `start` fills only their
     first `seed_rows` rows (the rest are never read before a step writes them), so that a
     refill copies no more. `lanes` problems run at once; finished lanes are finished and
-    refilled `refill` at a time, or all together once none is running."""
+    refilled `refill` at a time, or all together once none is running. `finish` sees the
+    buffers of every lane (leading axis: the lanes), so that it reads its lane's rows where
+    they lie rather than a copy of its whole buffers."""
     n = jax.tree.leaves(inputs)[0].shape[0]
     lanes = min(lanes, n)
     refill = min(refill, lanes)
@@ -43,13 +45,18 @@ def solve_queued(
 
     carry = jax.vmap(start)(take(inputs, jnp.arange(lanes)))
     owner = jnp.arange(lanes)  # the problem in each lane; n: none
-    results = jax.tree.map(
-        lambda leaf: jnp.zeros((n, *leaf.shape), leaf.dtype),
-        jax.eval_shape(lambda: finish(start(take(inputs, 0)))),
-    )
+
+    def finish_lanes(carry, lane):
+        axes = eqx.tree_at(buffers, jax.tree.map(lambda _: 0, carry), replace_fn=lambda _: None)
+        taken = with_buffers(take(without_buffers(carry), lane), buffers(carry))
+        return jax.vmap(finish, in_axes=(axes, 0))(taken, lane)
 
     def without_buffers(c):
         return eqx.tree_at(buffers, c, replace_fn=lambda _: None)
+
+    def with_buffers(stripped, b):
+        # (The state may hold Nones of its own: the stripped buffers' are told apart.)
+        return eqx.tree_at(buffers, stripped, b, is_leaf=lambda x: x is None)
 
     def advance(carry, owner):
         active = lanes_running(carry) & (owner < n)
@@ -59,7 +66,7 @@ def solve_queued(
             without_buffers(stepped),
             without_buffers(carry),
         )
-        return eqx.tree_at(buffers, kept, buffers(stepped))
+        return with_buffers(kept, buffers(stepped))
 
     def finished_and_fresh(carry, owner, queued):
         """The results of up to `refill` finished lanes and the starts of the problems
@@ -75,7 +82,7 @@ def solve_queued(
         seeds = jax.tree.map(lambda b: b[:, :seed_rows], buffers(fresh))
         return (
             problem,
-            jax.vmap(finish)(take(carry, lane_in)),
+            finish_lanes(carry, lane_in),
             jnp.where(valid, lane, lanes),
             jnp.where(following < n, following, n),
             without_buffers(fresh),
@@ -107,8 +114,12 @@ def solve_queued(
         )
         owner = owner.at[lane].set(following, mode="drop")
         queued = jnp.minimum(queued + jnp.sum(lane < lanes), n)
-        return eqx.tree_at(buffers, small, seeded), owner, queued, results
+        return with_buffers(small, seeded), owner, queued, results
 
+    results = jax.tree.map(
+        lambda leaf: jnp.zeros((n, *leaf.shape[1:]), leaf.dtype),
+        jax.eval_shape(finish_lanes, carry, owner[:1]),
+    )
     state = (carry, owner, jnp.asarray(lanes), results)
     _, _, _, results = jax.lax.while_loop(lambda s: jnp.any(s[1] < n), body, state)
     return results

@@ -66,6 +66,9 @@ class Recording(eqx.Module):
     buffer: Float[Array, "capacity quantities"]
     count: Int[Array, ""]
     names: tuple[str, ...] = eqx.field(static=True)
+    # A recording read in place from one lane of a batch's buffer ("lanes capacity
+    # quantities"), `of_lane`; None for a buffer of its own.
+    lane: Int[Array, ""] | None = None
 
     @classmethod
     def empty(cls, names: tuple[str, ...], capacity: int, dtype):
@@ -74,9 +77,20 @@ class Recording(eqx.Module):
         buffer = jnp.zeros((capacity, len(names)), dtype)
         return cls(buffer, jnp.zeros((), jnp.int32), tuple(names))
 
+    def of_lane(self, lane):
+        """This recording read from lane `lane` of `buffer`, which holds a batch's: under
+        `vmap`, taking each lane's buffer would copy it whole, where the reads need a few
+        rows."""
+        return Recording(self.buffer, self.count, self.names, lane)
+
+    def _read(self, rows, columns):
+        if self.lane is None:
+            return self.buffer[rows, columns]
+        return self.buffer[self.lane, rows, columns]
+
     @property
     def samples(self) -> dict[str, Float[Array, " capacity"]]:
-        return {name: self.buffer[:, k] for k, name in enumerate(self.names)}
+        return {name: self._read(slice(None), k) for k, name in enumerate(self.names)}
 
     def rows(self, start, size: int, names: tuple[str, ...]) -> dict:
         """Rows `start` to `start + size` of the quantities `names`, which must be
@@ -86,7 +100,9 @@ class Recording(eqx.Module):
             raise ValueError(f"{names} are not consecutive in the recording's {self.names}")
         # (Indexing, not lax.dynamic_slice: inside a loop the buffer is equinox's `_Buffer`.)
         start = jnp.asarray(start)
-        block = self.buffer[start + jnp.arange(size, dtype=start.dtype), first : first + len(names)]
+        block = self._read(
+            start + jnp.arange(size, dtype=start.dtype), slice(first, first + len(names))
+        )
         return {name: block[:, k] for k, name in enumerate(names)}
 
     def append(self, sample: dict, when=True):

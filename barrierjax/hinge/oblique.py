@@ -885,21 +885,25 @@ def _displacement_field(samples, count, x):
 
 def _final_displacement(recording: Recording, x):
     """W(x) at the last recorded time, as `_displacement_field` but over the recorded
-    steps alone (a few dozen, where the buffer holds thousands), one row read each."""
+    steps alone (a few dozen, where the buffer holds thousands), `_BLOCK` steps per read:
+    under `vmap`, a loop of one step per iteration cost more than the solve's steps."""
 
-    def motion(k):
-        row = {name: value[0] for name, value in recording.rows(k, 1, _MOTION).items()}
-        return row.pop("time"), _velocity_field(**row, x=x)
+    def block(b, w):
+        first = b * _BLOCK
+        rows = recording.rows(first, _BLOCK + 1, _MOTION)
+        t = rows.pop("time")
+        v = _velocity_field(**{k: r[:, None] for k, r in rows.items()}, x=x[None, :])
+        step = first + jnp.arange(_BLOCK, dtype=first.dtype)
+        # (Rows past the recorded ones may hold a rejected step's sample, even a NaN.)
+        increments = 0.5 * (v[1:] + v[:-1]) * jnp.diff(t)[:, None]
+        recorded = (step + 1 < recording.count)[:, None]
+        return w + jnp.sum(jnp.where(recorded, increments, 0.0), axis=0)
 
-    def step(k, carry):
-        w, t, v = carry
-        t_next, v_next = motion(k + 1)
-        return w + 0.5 * (v + v_next) * (t_next - t), t_next, v_next
+    blocks = (recording.count - 1 + _BLOCK - 1) // _BLOCK
+    return jax.lax.fori_loop(0, blocks, block, jnp.zeros_like(x))
 
-    t_first, v_first = motion(0)
-    carry = (jnp.zeros_like(v_first), t_first, v_first)
-    w, _, _ = jax.lax.fori_loop(0, recording.count - 1, step, carry)
-    return w
+
+_BLOCK = 16
 
 
 def _max_deflection(recording: Recording, final_position, w_final):
@@ -1063,6 +1067,10 @@ def oblique_impact(
     return jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), flat)
 
 
+def _of_lane(carry: Carry, lane) -> Carry:
+    return eqx.tree_at(lambda c: c.recording, carry, carry.recording.of_lane(lane))
+
+
 # Array inputs are solved in this many vmapped lanes, each taking the next scenario as soon
 # as its own is done (`_solve.queue`), finished and refilled this many at a time.
 _LANES, _REFILL = 256, 32
@@ -1081,7 +1089,7 @@ def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x)
             start,
             loop.step,
             loop.running,
-            lambda carry: results(loop.solution(carry)),
+            lambda carry, lane: results(loop.solution(_of_lane(carry, lane))),
             tuple(inputs),
             buffers=lambda carry: carry.recording.buffer,
             seed_rows=1,
