@@ -81,6 +81,7 @@ FIELDS = (
 REL_METRICS = ("t_final", "w_final", "damage", "exit_speed")
 METRICS = REL_METRICS + ("exit_angle_deg",)
 THROUGHPUT_RTOL = 1e-6
+THROUGHPUT_ROUNDS = 3
 TARGET_THROUGHPUT_RATIO = 10.0
 TARGET_ENERGY = 1e-6  # issue 3: the energy balance closes to 1e-6 relative at every saved time
 
@@ -517,19 +518,31 @@ def section_throughput(cfg, seed, scenario_set):
         s = scenario_set if cfg["use_scenarios_as_batch"] else batch_inputs(n, seed)
         n = len(s["mass_ratio"])
         args = args_of(s)
-        for model in ("oblique", "normal_ode"):
-            row = dict(batch=n, rtol=THROUGHPUT_RTOL, mode="one call")
+        row = {m: dict(batch=n, rtol=THROUGHPUT_RTOL, mode="one call") for m in rows}
+        ready = {}
+        for model in rows:
             try:
                 kind, inputs = ("oblique", args) if model == "oblique" else ("normal", args[:3])
                 compiled, compile_s, reused = executable(kind, inputs, THROUGHPUT_RTOL)
-                out, run_s = run_timed(compiled, inputs)
-                nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
-                row.update(timed(n, run_s, compile_s, reused), n_nonfinite=nonfinite)
+                ready[model] = (compiled, inputs, compile_s, reused)
             except Exception as exc:  # noqa: BLE001 - a failure is a result
                 drain()
-                row.update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
-            rows[model].append(row)
-            print_row_b(model, row)
+                row[model].update(ok=False, failure=f"{type(exc).__name__}: {first_line(exc)}")
+        # The two models' calls alternate, THROUGHPUT_ROUNDS rounds of each, so that both
+        # see the same load on this shared machine; each keeps its best.
+        best = {}
+        for r in range(THROUGHPUT_ROUNDS):
+            for model, (compiled, inputs, _, _) in ready.items():
+                out, run_s = run_timed(compiled, inputs, warm_up=r == 0)
+                best[model] = (out, min(run_s, best.get(model, (None, np.inf))[1]))
+        for model, model_rows in rows.items():
+            if model in ready:
+                out, run_s = best[model]
+                nonfinite = int(np.sum(~np.isfinite(np.asarray(out.t_final))))
+                compile_s, reused = ready[model][2:]
+                row[model].update(timed(n, run_s, compile_s, reused), n_nonfinite=nonfinite)
+            model_rows.append(row[model])
+            print_row_b(model, row[model])
 
     # Diagnostic: a Python loop of batch-1 calls (the batch-1 executable).
     loop = None
