@@ -73,3 +73,8 @@ def test_tangents_follow_each_problem():
     _, d = jax.jvp(lambda s: solve(steps, s, 2, 1)["total"], (scale,), (tangent,))
     m = np.asarray(steps)
     np.testing.assert_allclose(d, np.asarray(tangent) * (1 + m * (m - 1) / 2), rtol=1e-12)
+
+
+def test_no_problems_give_empty_results():
+    out = solve(jnp.zeros(0, jnp.int32), jnp.zeros(0), 3, 2)
+    assert out["total"].shape == (0,) and out["k"].shape == (0,)

@@ -38,6 +38,21 @@ def solve_queued(
     buffers of every lane (leading axis: the lanes), so that it reads its lane's rows where
     they lie rather than a copy of its whole buffers."""
     n = jax.tree.leaves(inputs)[0].shape[0]
+    if n == 0:
+        one = jax.tree.map(lambda a: jnp.zeros((1, *a.shape[1:]), a.dtype), inputs)
+        solve_one = lambda: solve_queued(
+            start,
+            step,
+            running,
+            finish,
+            one,
+            buffers=buffers,
+            seed_rows=seed_rows,
+            lanes=lanes,
+            refill=refill,
+        )
+        shapes = jax.eval_shape(solve_one)
+        return jax.tree.map(lambda s: jnp.zeros((0, *s.shape[1:]), s.dtype), shapes)
     lanes = min(lanes, n)
     refill = min(refill, lanes)
     take = lambda tree, index: jax.tree.map(lambda a: a[index], tree)
