@@ -192,11 +192,13 @@ def _locate(event, start, end, e_start, e_end, length):
     return at(jnp.clip(u - e / jnp.where(slope != 0.0, slope, 1.0), 0.0, 1.0))
 
 
-# Newton iterations of `_locate`: from the secant, three reach rounding on a smooth term
-# over a step the error control accepted. They run in a loop of their own: unrolled, XLA
-# fused them into the step's kernels, and each added about 40 s to the compilation of a
-# batch (27 s with none, 104 s with two, 188 s with four) for no measurable run time.
-_NEWTON_ITERATIONS = 3
+# Newton iterations of `_locate`, from the secant. Three were not always enough: on one
+# scenario of benchmarks/oblique_impact.py's (a) at rtol 1e-10, a vmapped run located a
+# stage's end 5e-7 off in time (the bisection safeguard had taken over), and t_final came
+# out 2e-7 off where the same scenario alone was 5e-10 off; with six both agree. They run
+# in a loop of their own: unrolled, XLA fused them into the step's kernels, and each added
+# about 40 s to the compilation of a batch; in the loop they cost no measurable run time.
+_NEWTON_ITERATIONS = 6
 
 _STEP, _START, _DONE = 0, 1, 2
 
