@@ -39,19 +39,10 @@ def solve_queued(
     they lie rather than a copy of its whole buffers."""
     n = jax.tree.leaves(inputs)[0].shape[0]
     if n == 0:
+        # The results' shapes, from the same solve of a single (zero) problem.
         one = jax.tree.map(lambda a: jnp.zeros((1, *a.shape[1:]), a.dtype), inputs)
-        solve_one = lambda: solve_queued(
-            start,
-            step,
-            running,
-            finish,
-            one,
-            buffers=buffers,
-            seed_rows=seed_rows,
-            lanes=lanes,
-            refill=refill,
-        )
-        shapes = jax.eval_shape(solve_one)
+        options = {"buffers": buffers, "seed_rows": seed_rows, "lanes": lanes, "refill": refill}
+        shapes = jax.eval_shape(lambda: solve_queued(start, step, running, finish, one, **options))
         return jax.tree.map(lambda s: jnp.zeros((0, *s.shape[1:]), s.dtype), shapes)
     lanes = min(lanes, n)
     refill = min(refill, lanes)
@@ -73,8 +64,7 @@ def solve_queued(
         # (The state may hold Nones of its own: the stripped buffers' are told apart.)
         return eqx.tree_at(buffers, stripped, b, is_leaf=lambda x: x is None)
 
-    def advance(carry, owner):
-        active = lanes_running(carry) & (owner < n)
+    def advance(carry, active):
         stepped = jax.vmap(step)(carry)
         kept = jax.tree.map(
             lambda new, old: jnp.where(active.reshape((-1,) + (1,) * (new.ndim - 1)), new, old),
@@ -83,11 +73,12 @@ def solve_queued(
         )
         return with_buffers(kept, buffers(stepped))
 
-    def finished_and_fresh(carry, owner, queued):
+    def finished_and_fresh(carry, busy, owner, queued):
         """The results of up to `refill` finished lanes and the starts of the problems
-        that take their place: small arrays only, so that the conditional that computes
-        them copies neither the lanes' buffers nor the results."""
-        finished = ~lanes_running(carry) & (owner < n)
+        that take their place (with whether each is running): small arrays only, so that
+        the conditional that computes them copies neither the lanes' buffers nor the
+        results."""
+        finished = ~busy & (owner < n)
         lane = jnp.nonzero(finished, size=refill, fill_value=lanes)[0]
         valid = lane < lanes
         lane_in = jnp.minimum(lane, lanes - 1)
@@ -95,27 +86,29 @@ def solve_queued(
         following = queued + jnp.cumsum(valid) - 1
         fresh = jax.vmap(start)(take(inputs, jnp.minimum(following, n - 1)))
         seeds = jax.tree.map(lambda b: b[:, :seed_rows], buffers(fresh))
+        following = jnp.where(following < n, following, n)
         return (
             problem,
             finish_lanes(carry, lane_in),
             jnp.where(valid, lane, lanes),
-            jnp.where(following < n, following, n),
+            following,
             without_buffers(fresh),
             seeds,
+            lanes_running(fresh) & (following < n),
         )
 
-    def none_finished(carry, owner, queued):
-        shapes = jax.eval_shape(finished_and_fresh, carry, owner, queued)
+    def none_finished(carry, busy, owner, queued):
+        shapes = jax.eval_shape(finished_and_fresh, carry, busy, owner, queued)
         nothing = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
         return (jnp.full(refill, n), nothing[1], jnp.full(refill, lanes), *nothing[3:])
 
     def body(state):
-        carry, owner, queued, results = state
-        carry = advance(carry, owner)
+        carry, busy, owner, queued, results = state
+        carry = advance(carry, busy)
         busy = lanes_running(carry) & (owner < n)
         due = (jnp.sum(~busy & (owner < n)) >= refill) | ~jnp.any(busy)
-        problem, done, lane, following, fresh, seeds = jax.lax.cond(
-            due, finished_and_fresh, none_finished, carry, owner, queued
+        problem, done, lane, following, fresh, seeds, fresh_busy = jax.lax.cond(
+            due, finished_and_fresh, none_finished, carry, busy, owner, queued
         )
         # Out-of-range indices (no lane, no problem) are dropped.
         results = jax.tree.map(lambda r, d: r.at[problem].set(d, mode="drop"), results, done)
@@ -128,13 +121,14 @@ def solve_queued(
             seeds,
         )
         owner = owner.at[lane].set(following, mode="drop")
+        busy = busy.at[lane].set(fresh_busy, mode="drop")
         queued = jnp.minimum(queued + jnp.sum(lane < lanes), n)
-        return with_buffers(small, seeded), owner, queued, results
+        return with_buffers(small, seeded), busy, owner, queued, results
 
     results = jax.tree.map(
         lambda leaf: jnp.zeros((n, *leaf.shape[1:]), leaf.dtype),
         jax.eval_shape(finish_lanes, carry, owner[:1]),
     )
-    state = (carry, owner, jnp.asarray(lanes), results)
-    _, _, _, results = jax.lax.while_loop(lambda s: jnp.any(s[1] < n), body, state)
+    state = (carry, lanes_running(carry), owner, jnp.asarray(lanes), results)
+    _, _, _, _, results = jax.lax.while_loop(lambda s: jnp.any(s[2] < n), body, state)
     return results
