@@ -73,11 +73,10 @@ def solve_queued(
         )
         return with_buffers(kept, buffers(stepped))
 
-    def finished_and_fresh(carry, busy, owner, queued):
-        """The results of up to `refill` finished lanes and the starts of the problems
-        that take their place (with whether each is running): small arrays only, so that
-        the conditional that computes them copies neither the lanes' buffers nor the
-        results."""
+    def refilled(carry, busy, owner, queued, results):
+        """Up to `refill` finished lanes finished into `results`, and the problems next in
+        the queue started in their place. Their buffers are seeded by the caller, outside
+        the conditional that runs this: through it, they would be copied whole."""
         finished = ~busy & (owner < n)
         lane = jnp.nonzero(finished, size=refill, fill_value=lanes)[0]
         valid = lane < lanes
@@ -85,44 +84,41 @@ def solve_queued(
         problem = jnp.where(valid, owner[lane_in], n)
         following = queued + jnp.cumsum(valid) - 1
         fresh = jax.vmap(start)(take(inputs, jnp.minimum(following, n - 1)))
-        seeds = jax.tree.map(lambda b: b[:, :seed_rows], buffers(fresh))
         following = jnp.where(following < n, following, n)
+        lane = jnp.where(valid, lane, lanes)
+        # Out-of-range indices (no lane, no problem) are dropped.
+        put = lambda old, new, index: old.at[index].set(new, mode="drop")
+        done = finish_lanes(carry, lane_in)
         return (
-            problem,
-            finish_lanes(carry, lane_in),
-            jnp.where(valid, lane, lanes),
-            following,
-            without_buffers(fresh),
-            seeds,
-            lanes_running(fresh) & (following < n),
+            jax.tree.map(
+                lambda old, new: put(old, new, lane), without_buffers(carry), without_buffers(fresh)
+            ),
+            put(busy, lanes_running(fresh) & (following < n), lane),
+            put(owner, following, lane),
+            jnp.minimum(queued + jnp.sum(valid), n),
+            jax.tree.map(lambda r, d: put(r, d, problem), results, done),
+            lane,
+            jax.tree.map(lambda b: b[:, :seed_rows], buffers(fresh)),
         )
 
-    def none_finished(carry, busy, owner, queued):
-        shapes = jax.eval_shape(finished_and_fresh, carry, busy, owner, queued)
-        nothing = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
-        return (jnp.full(refill, n), nothing[1], jnp.full(refill, lanes), *nothing[3:])
+    def unchanged(carry, busy, owner, queued, results):
+        seeds = jax.eval_shape(refilled, carry, busy, owner, queued, results)[-1]
+        zeros = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), seeds)
+        return without_buffers(carry), busy, owner, queued, results, jnp.full(refill, lanes), zeros
 
     def body(state):
         carry, busy, owner, queued, results = state
         carry = advance(carry, busy)
         busy = lanes_running(carry) & (owner < n)
         due = (jnp.sum(~busy & (owner < n)) >= refill) | ~jnp.any(busy)
-        problem, done, lane, following, fresh, seeds, fresh_busy = jax.lax.cond(
-            due, finished_and_fresh, none_finished, carry, busy, owner, queued
-        )
-        # Out-of-range indices (no lane, no problem) are dropped.
-        results = jax.tree.map(lambda r, d: r.at[problem].set(d, mode="drop"), results, done)
-        small = jax.tree.map(
-            lambda old, new: old.at[lane].set(new, mode="drop"), without_buffers(carry), fresh
+        small, busy, owner, queued, results, lane, seeds = jax.lax.cond(
+            due, refilled, unchanged, carry, busy, owner, queued, results
         )
         seeded = jax.tree.map(
             lambda old, new: old.at[lane, :seed_rows].set(new, mode="drop"),
             buffers(carry),
             seeds,
         )
-        owner = owner.at[lane].set(following, mode="drop")
-        busy = busy.at[lane].set(fresh_busy, mode="drop")
-        queued = jnp.minimum(queued + jnp.sum(lane < lanes), n)
         return with_buffers(small, seeded), busy, owner, queued, results
 
     results = jax.tree.map(
