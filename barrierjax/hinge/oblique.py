@@ -139,6 +139,9 @@ class ObliqueImpact(eqx.Module):
     damage: Scalar
     exit_normal_speed: Scalar
     exit_tangential_speed: Scalar
+    # The angle of the exit velocity to the barrier; 0 (with zero derivatives) for a vehicle
+    # that ends at rest against it, friction having stopped its slide before the barrier
+    # stopped, where the angle is undefined (arctan2(0, 0) would give NaN derivatives).
     exit_angle_deg: Scalar
     separated: Scalar
     crush_work: Scalar
@@ -972,6 +975,14 @@ def _history(samples, count, p: _Params, x, displacement):
     )
 
 
+def _exit_angle_deg(normal, tangential):
+    """The exit velocity's angle to the barrier, 0 for a vehicle at rest (the inner `where`
+    keeps arctan2's derivative at (0, 0), NaN, out of the gradient)."""
+    at_rest = (normal == 0.0) & (tangential == 0.0)
+    angle = jnp.arctan2(-normal, jnp.where(at_rest, 1.0, tangential))
+    return jnp.where(at_rest, 0.0, jnp.degrees(angle))
+
+
 def _finish(solution: Solution, *, history, n_x) -> tuple[ObliqueImpact, _Outcome]:
     """The results of a solve, and how it ended."""
     y, f, stage, p = solution.y, solution.derivative, solution.stage, solution.args
@@ -997,7 +1008,7 @@ def _finish(solution: Solution, *, history, n_x) -> tuple[ObliqueImpact, _Outcom
         damage=y.crush,
         exit_normal_speed=y.vehicle_normal,
         exit_tangential_speed=exit_tangential,
-        exit_angle_deg=jnp.degrees(jnp.arctan2(-y.vehicle_normal, exit_tangential)),
+        exit_angle_deg=_exit_angle_deg(y.vehicle_normal, exit_tangential),
         separated=stage.separated.astype(t_final.dtype),
         crush_work=p.phi * y.crush,
         backing_work=y.backing_work,
