@@ -190,11 +190,18 @@ def scenarios(mu, phi, angle, speed, friction) -> dict:
     )
 
 
+INPUTS = ("mass_ratio", "force_ratio", "normal_speed", "tangential_speed", "friction")
+
+
 def args_of(s: dict, i=None):
-    keys = ("mass_ratio", "force_ratio", "normal_speed", "tangential_speed", "friction")
     if i is None:
-        return tuple(np.asarray(s[k], np.float64) for k in keys)
-    return tuple(np.float64(s[k][i]) for k in keys)
+        return tuple(np.asarray(s[k], np.float64) for k in INPUTS)
+    return tuple(np.float64(s[k][i]) for k in INPUTS)
+
+
+def non_finite_inputs(row: dict) -> list:
+    """The inputs whose gradient has a non-finite entry, from (c)'s `finite_by_input`."""
+    return [name for name, ok in zip(INPUTS, row["finite_by_input"]) if not ok]
 
 
 def pick(s: dict, i: int) -> dict:
@@ -700,12 +707,12 @@ def section_gradient(cfg, seed):
                 vmapped_failed = n
         row["rtol"] = THROUGHPUT_RTOL
         if row["ok"]:
-            finite = row["finite_by_input"]
+            bad = non_finite_inputs(row)
             print(
                 f"{n:>8d}{row['forward_s']:>12.3e}{row['grad_s']:>12.3e}{row['ratio']:>8.2f}"
                 f"{row['forward_compile_s']:>13.1f}{row['grad_compile_s']:>14.1f}"
                 f"{row['child_peak_rss_gb']:>9.1f}"
-                + ("" if all(finite) else f"  NON-FINITE GRADIENT (by input: {finite})"),
+                + (f"  NON-FINITE GRADIENT with respect to {', '.join(bad)}" if bad else ""),
                 flush=True,
             )
         else:
@@ -1264,9 +1271,10 @@ def main(argv=None):
     for r in c_rows:
         if not r["ok"]:
             surprises.append(f"(c) gradient batch {r['batch']} failed: {r['failure']}")
-        elif not all(r["finite_by_input"]):
+        elif non_finite_inputs(r):
             surprises.append(
-                f"(c) gradient batch {r['batch']}: non-finite entries {r['finite_by_input']}"
+                f"(c) gradient batch {r['batch']}: non-finite gradient with respect to "
+                + ", ".join(non_finite_inputs(r))
             )
     for sec in d_sections:
         bad = {k: v for k, v in sec["counts"].items() if k != "ok" and not k.startswith("retry")}
