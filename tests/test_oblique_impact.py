@@ -148,15 +148,18 @@ def test_vmap_equals_loop(oblique_batch):
             )
 
 
-def _jacobian_against_finite_differences(x, tolerance):
-    fields = ("exit_angle_deg", "exit_tangential_speed", "damage", "w_final", "t_final")
-
+def _jacobian_against_finite_differences(
+    x,
+    tolerance,
+    fields=("exit_angle_deg", "exit_tangential_speed", "damage", "w_final", "t_final"),
+    inputs=range(5),
+):
     def outputs(x):
         r = oblique_impact(x[0], x[1], x[2], x[3], friction=x[4], rtol=1e-11)
         return jnp.stack([getattr(r, f) for f in fields])
 
     jacobian = jax.jacrev(outputs)(x)
-    for i in range(5):
+    for i in inputs:
         h = 1e-5 * x[i]
         fd = (outputs(x.at[i].add(h)) - outputs(x.at[i].add(-h))) / (2 * h)
         scale = jnp.maximum(jnp.abs(fd), 1e-6 * jnp.max(jnp.abs(jacobian), axis=1))
@@ -179,8 +182,7 @@ def test_gradients_of_a_vehicle_left_at_rest_against_the_barrier():
     # Friction stops the slide before the barrier stops, and the vehicle stays in contact:
     # it ends at rest, its exit angle undefined (0 by convention). Its derivatives were NaN
     # (arctan2 at (0, 0)), and with them the whole gradient of a sum over a batch; they
-    # are 0. (The slide's stop is not located as an event, so t_final's and w_final's
-    # derivatives are 3e-4 to 7e-4 off here: see README, known limits.)
+    # are 0.
     x = jnp.array([0.333, 7.49, 0.300, 0.0816, 0.326])
     fields = ("exit_angle_deg", "exit_tangential_speed", "exit_normal_speed", "damage", "t_final")
 
@@ -192,6 +194,26 @@ def test_gradients_of_a_vehicle_left_at_rest_against_the_barrier():
     assert np.all(np.asarray(outputs(x))[:3] == 0.0)
     assert np.all(jacobian[:3] == 0.0)
     assert np.all(np.isfinite(jacobian)) and np.all(jacobian[3:, :4] != 0.0)
+
+
+def test_gradients_match_finite_differences_where_friction_stops_the_slide_in_contact():
+    # The same scenario: friction switches off where the slide stops, and the force jumps.
+    # Inside a step, the stop carried no derivative (t_final's and w_final's with respect to
+    # mu were 3e-4 to 7e-4 off, with respect to V_H and f 0.8 to 17 times their size); it
+    # is an event now.
+    x = jnp.array([0.333, 7.49, 0.300, 0.0816, 0.326])
+    _jacobian_against_finite_differences(x, 1e-5, fields=("damage", "w_final", "t_final"))
+
+
+def test_gradients_match_finite_differences_where_friction_stops_the_slide_while_crushing():
+    # A light vehicle at a steep angle: the slide stops at T = 4e-4, before T* = 9e-4.
+    # Both stage ends are linear in T, where the event's location went wrong
+    # (test_recorded_rk): t_star's derivative was 0.7 % off at this rtol (and 1 % at rtol
+    # 1e-10 before the stop was an event). (Those with respect to V_H and f are 1e-10 of
+    # the others' or less, below what differences resolve.)
+    x = jnp.array([0.01, 1.1, 0.0996, 0.00872, 0.2])
+    fields = ("damage", "w_final", "t_final", "t_star")
+    _jacobian_against_finite_differences(x, 1e-6, fields=fields, inputs=range(3))
 
 
 @pytest.mark.parametrize(

@@ -180,7 +180,10 @@ def _locate(event, start, end, e_start, e_end, length):
         ).T
         lo, hi = jnp.where(e > 0.0, u, lo), jnp.where(e > 0.0, hi, u)
         step = u - e / jnp.where(slope != 0.0, slope, 1.0)
-        return jnp.where((step > lo) & (step < hi), step, 0.5 * (lo + hi)), lo, hi
+        # (A closed bracket: a step onto its end is the zero itself, where the secant has
+        # landed on a linear term's; an open one bisected away from it, and the derivative
+        # of the last correction, taken there, was off.)
+        return jnp.where((step >= lo) & (step <= hi), step, 0.5 * (lo + hi)), lo, hi
 
     bracket = (u, jnp.zeros_like(u), jnp.ones_like(u))
     u, _, _ = jax.lax.fori_loop(0, _NEWTON_ITERATIONS, newton, bracket)

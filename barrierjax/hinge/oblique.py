@@ -403,13 +403,14 @@ class _Stage(eqx.Module):
     t_star: Scalar
     separated: Bool[Array, ""]
     overtaken: Bool[Array, ""]
+    sliding: Bool[Array, ""]  # the vehicle slides along the barrier (V_H > 0)
 
 
-def _sliding_friction(vh, p: _Params):
+def _sliding_friction(stage: _Stage, p: _Params):
     """The friction coefficient acting on the vehicle: Coulomb's f while it slides; once it
-    stops sliding, static friction holds it (the barrier takes no axial motion), with no
-    tangential deceleration and no work."""
-    return jnp.where(vh > 0.0, p.friction, 0.0)
+    has stopped sliding (an event, `_transition`), static friction holds it (the barrier
+    takes no axial motion), with no tangential deceleration and no work."""
+    return jnp.where(stage.sliding, p.friction, 0.0)
 
 
 def _series(t, vn, vh, p: _Params) -> dict:
@@ -431,6 +432,8 @@ def _series(t, vn, vh, p: _Params) -> dict:
     stop = jnp.where(braking, vh / jnp.where(braking, deceleration, 1.0), jnp.inf)
     slide = jnp.minimum(t, stop)
     slid = vh * slide - 0.5 * deceleration * slide**2
+    # (Past the stop V_H is exactly 0, not vh - deceleration stop, which may round below.)
+    sliding_speed = jnp.where(t < stop, vh - deceleration * t, 0.0)
     contact_displacement = 0.5 * a * t**2
     return {
         "v0": a * t,
@@ -440,7 +443,7 @@ def _series(t, vn, vh, p: _Params) -> dict:
         "position": slid,
         "rotation": 0.5 * a * t**2 / p.s_star,
         "vehicle_normal": vn - vehicle * p.phi * t / p.mu,
-        "vehicle_tangential": vh - deceleration * slide,
+        "vehicle_tangential": sliding_speed,
         "crush": vehicle * (vn * t - 0.5 * p.phi * t**2 / p.mu - contact_displacement),
         "contact_displacement": contact_displacement,
         "backing_work": 0.25 * a * p.s_star * t**2,
@@ -454,15 +457,15 @@ def _v0(y: _State, stage: _Stage):
     return jnp.where(stage.phase == _CRUSHING, y.speed, jnp.exp(y.speed))
 
 
-def _contact_force(y: _State, v0, curvature, theta, p: _Params):
+def _contact_force(y: _State, v0, curvature, theta, stage: _Stage, p: _Params):
     """The force ratio in contact: (3.3.20)-(3.3.22) solved for it."""
-    vh = jnp.maximum(y.vehicle_tangential, 0.0)
+    vh = y.vehicle_tangential
     s1, s2 = y.s1, y.s2
     numerator = (
         p.mu * (s1 * s2 + 3.0) / (2.0 * s1 * s2) + p.mu * vh * v0 / s1 - p.mu * vh**2 * curvature
     )
     # The friction term: the tangential deceleration f g / mu changes theta V_H.
-    return numerator / (1.0 - _sliding_friction(vh, p) * theta + 4.0 * p.mu / (s1 + s2))
+    return numerator / (1.0 - _sliding_friction(stage, p) * theta + 4.0 * p.mu / (s1 + s2))
 
 
 def _force(y: _State, f: _State):
@@ -478,11 +481,13 @@ def _field(y: _State, stage: _Stage, past: _Past, p: _Params) -> _State:
     crushing, free = stage.phase == _CRUSHING, stage.phase == _FREE
     v0 = _v0(y, stage)
     per_time = jnp.where(crushing, 1.0, v0)  # dT per unit of the phase's variable
-    vh = jnp.maximum(y.vehicle_tangential, 0.0)
+    # (Unclamped: past the slide's stop, within the step that locates it, the field goes
+    # on smoothly.)
+    vh = y.vehicle_tangential
     psi, curvature = _slope_memory(past, y.position, p.s_star)
     theta = jnp.where(free, 0.0, psi - y.rotation)
     force = jnp.where(
-        crushing, p.phi, jnp.where(free, 0.0, _contact_force(y, v0, curvature, theta, p))
+        crushing, p.phi, jnp.where(free, 0.0, _contact_force(y, v0, curvature, theta, stage, p))
     )
     load_speed = jnp.where(free, 0.0, vh)
     contact_velocity = v0 + theta * load_speed
@@ -498,7 +503,7 @@ def _field(y: _State, stage: _Stage, past: _Past, p: _Params) -> _State:
         position=load_speed,
         rotation=v0 / y.s1,
         vehicle_normal=jnp.where(crushing, -vehicle * force / p.mu, 0.0),
-        vehicle_tangential=-vehicle * _sliding_friction(vh, p) * force / p.mu,
+        vehicle_tangential=-vehicle * _sliding_friction(stage, p) * force / p.mu,
         crush=jnp.where(crushing, vehicle * (y.vehicle_normal - contact_velocity), 0.0),
         contact_displacement=contact_velocity,
         backing_work=backing,
@@ -566,8 +571,7 @@ def _record(y: _State, f: _State, rate: _State, stage: _Stage, past: _Past, p: _
     force = jnp.where(crushing, p.phi, jnp.where(contact, _force(y, f), 0.0))
     theta = jnp.where(crushing | contact, _slope(y, p, past), 0.0)
     # In contact the vehicle moves with the load point: V0 + theta V_H.
-    vh = jnp.maximum(y.vehicle_tangential, 0.0)
-    vehicle_normal = jnp.where(contact, v0 + theta * vh, y.vehicle_normal)
+    vehicle_normal = jnp.where(contact, v0 + theta * y.vehicle_tangential, y.vehicle_normal)
     return _sample(
         jnp.asarray(stage.phase, v0.dtype),
         v0,
@@ -638,7 +642,9 @@ def _contact_end(y: _State, f: _State, stage: _Stage, p: _Params):
 def _event(y: _State, f: _State, stage: _Stage, p: _Params):
     """The terms whose first zero ends the stage: the crushing phase's (the vehicle
     stops crushing where its velocity is the load point's; the moving load's at t_end),
-    the contact's (`_contact_end`, and the next breakpoint) or the free phase's."""
+    the contact's (`_contact_end`, and the next breakpoint) or the free phase's; and, the
+    last, the slide's stop while the vehicle, crushing or in contact, slides against
+    friction."""
     phase = stage.phase
     if p.moving_load:
         crushing = p.t_end - y.time
@@ -648,7 +654,8 @@ def _event(y: _State, f: _State, stage: _Stage, p: _Params):
     contact = (*_contact_end(y, f, stage, p), stage.breakpoints.position[0] - y.position)
     first = jnp.where(phase == _CRUSHING, crushing, jnp.where(phase == _CONTACT, contact[0], free))
     rest = [jnp.where(phase == _CONTACT, term, jnp.inf) for term in contact[1:]]
-    return jnp.stack([first, *rest])
+    slide = jnp.where(stage.sliding & (phase != _FREE), y.vehicle_tangential, jnp.inf)
+    return jnp.stack([first, *rest, slide])
 
 
 def _transition(y: _State, f: _State, stage: _Stage, recording: Recording, past: _Past, p: _Params):
@@ -667,13 +674,21 @@ def _transition(y: _State, f: _State, stage: _Stage, recording: Recording, past:
     reads the trace only between its two breakpoints. The end of a segment and the start
     of the next record the left and right limits at the new breakpoint.
 
+    Friction may stop the slide in either phase: the field's friction terms switch off
+    there, so the stop is an event of its own, after which the phase goes on with V_H = 0
+    exactly. (The force jumps there, and so does the curvature the right hinge deposits;
+    but the load no longer moves, and never reaches that point.)
+
     After the contact: the free phase if the vehicle separated, or the end. The state's
     `vehicle_normal` then holds the exit velocity: the load point's at separation, (3.3.3)
     with V0 = 0 (theta V_H) at rest in contact."""
     left = recording.count - 1  # this stage's last sample
     if p.moving_load:
         return y, stage, 1.0, jnp.asarray(True)
-    crushing, in_contact = stage.phase == _CRUSHING, stage.phase == _CONTACT
+    terms = _event(y, f, stage, p)
+    stops = jnp.argmin(terms) == terms.shape[0] - 1
+    crushing = (stage.phase == _CRUSHING) & ~stops
+    in_contact = (stage.phase == _CONTACT) & ~stops
     v0 = _v0(y, stage)
     # The crushing phase ends: the contact, against s, starts.
     breakpoints = _Breakpoints.at_contact(y, p.s_star, left)
@@ -686,6 +701,7 @@ def _transition(y: _State, f: _State, stage: _Stage, recording: Recording, past:
         t_star=y.time,
         separated=stage.separated,
         overtaken=stage.overtaken,
+        sliding=stage.sliding,
     )
     # A segment of the contact ends on a breakpoint: the next starts.
     ahead = stage.breakpoints
@@ -707,23 +723,23 @@ def _transition(y: _State, f: _State, stage: _Stage, recording: Recording, past:
         (jnp.where(separated, _FREE, _CONTACT), separated, overtaken),
     )
     contact_ends = in_contact & ~on_breakpoint
-    exit_normal = jnp.where(separated, v0, 0.0) + _slope(y, p, past) * jnp.maximum(
-        y.vehicle_tangential, 0.0
-    )
+    exit_normal = jnp.where(separated, v0, 0.0) + _slope(y, p, past) * y.vehicle_tangential
     y = eqx.tree_at(
-        lambda y: (y.speed, y.vehicle_normal),
+        lambda y: (y.speed, y.vehicle_normal, y.vehicle_tangential),
         y,
         (
             jnp.where(crushing, jnp.log(v0), y.speed),
             jnp.where(contact_ends, exit_normal, y.vehicle_normal),
+            jnp.where(stops, 0.0, y.vehicle_tangential),
         ),
     )
     pick = lambda when, a, b: jax.tree.map(lambda x, z: jnp.where(when, x, z), a, b)
-    stage_next = pick(crushing, contact, pick(on_breakpoint, segment, ended))
+    stopped = eqx.tree_at(lambda s: s.sliding, stage, jnp.asarray(False))
+    stage_next = pick(stops, stopped, pick(crushing, contact, pick(on_breakpoint, segment, ended)))
     done = (contact_ends & (~separated | overtaken)) | (stage.phase == _FREE)
     # A step of dT from the crushing phase is one of dT / V0 in s; a phase or a segment
     # starts with a fraction of the last step (`_RESTART`).
-    restart = jnp.where(crushing | on_breakpoint, _RESTART, 1.0)
+    restart = jnp.where(crushing | on_breakpoint | stops, _RESTART, 1.0)
     return y, stage_next, restart * jnp.where(crushing, 1.0 / v0, 1.0), done
 
 
@@ -817,6 +833,7 @@ def _start(loop: RecordedRK, mu, phi, vn, vh, friction, *, history, t_end=None) 
         t_star=zero,
         separated=jnp.asarray(False),
         overtaken=jnp.asarray(False),
+        sliding=start["vehicle_tangential"] > 0.0,
     )
     return loop.start(y0, crushing, recording, t_start, p)
 
@@ -996,8 +1013,7 @@ def _finish(solution: Solution, *, history, n_x) -> tuple[ObliqueImpact, _Outcom
         hist = _history(samples, recording.count, p, x, displacement)
     w_final = y.contact_displacement + extra
     t_final = y.time + remaining
-    # (Friction may have stopped the slide within the last step: no negative overshoot.)
-    exit_tangential = jnp.maximum(y.vehicle_tangential, 0.0)
+    exit_tangential = y.vehicle_tangential
     return ObliqueImpact(
         t_star=stage.t_star,
         t_final=t_final,
