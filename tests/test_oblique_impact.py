@@ -209,11 +209,11 @@ def test_gradients_match_finite_differences_where_friction_stops_the_slide_while
     # A light vehicle at a steep angle: the slide stops at T = 4e-4, before T* = 9e-4.
     # Both stage ends are linear in T, where the event's location went wrong
     # (test_recorded_rk): t_star's derivative was 0.7 % off at this rtol (and 1 % at rtol
-    # 1e-10 before the stop was an event). (Those with respect to V_H and f are 1e-10 of
-    # the others' or less, below what differences resolve.)
+    # 1e-10 before the stop was an event). (Those with respect to V_H are 1e-13 of the
+    # others, below what differences resolve.)
     x = jnp.array([0.01, 1.1, 0.0996, 0.00872, 0.2])
     fields = ("damage", "w_final", "t_final", "t_star")
-    _jacobian_against_finite_differences(x, 1e-6, fields=fields, inputs=range(3))
+    _jacobian_against_finite_differences(x, 1e-5, fields=fields, inputs=(0, 1, 2, 4))
 
 
 @pytest.mark.parametrize(
