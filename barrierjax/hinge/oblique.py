@@ -705,9 +705,8 @@ def _transition(y: _State, f: _State, stage: _Stage, recording: Recording, past:
     )
     # A segment of the contact ends on a breakpoint: the next starts.
     ahead = stage.breakpoints
-    on_breakpoint = in_contact & (
-        ahead.position[0] - y.position < jnp.min(jnp.stack(_contact_end(y, f, stage, p)))
-    )
+    # (In contact the event's terms are `_contact_end`'s, then the breakpoint's.)
+    on_breakpoint = in_contact & (terms[3] < jnp.min(terms[:3]))
     pending = ahead.pop_and_push(y.position + y.s1, left)
     segment = eqx.tree_at(
         lambda s: (s.first, s.last, s.breakpoints),
