@@ -714,7 +714,7 @@ def _transition(y: _State, f: _State, stage: _Stage, recording: Recording, past:
         (ahead.right[0], pending.left[0], pending),
     )
     # The contact ends: the free phase follows a separation.
-    separated = _force(y, f) / p.phi < y.speed - stage.log_rest
+    separated = terms[0] < terms[1]  # the force fell to zero before V0 to its rest value
     overtaken = y.s1 / p.s_star < 2.0 * _OVERTAKEN
     ended = eqx.tree_at(
         lambda s: (s.phase, s.separated, s.overtaken),
