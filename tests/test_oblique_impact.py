@@ -148,6 +148,27 @@ def test_vmap_equals_loop(oblique_batch):
             )
 
 
+def test_batched_gradient_equals_the_loop_of_scalar_gradients():
+    # A batch takes its derivatives through another path than a scalar (the directions
+    # solved as problems of their own, `_solve.sensitivity`). The cases: contact to rest,
+    # a light vehicle that separates, and friction stopping the slide in contact.
+    cases = [
+        (5.0, 2.0, 0.4, 0.23, 0.0),
+        (0.2, 3.0, 0.5, 0.5, 0.1),
+        (0.333, 7.49, 0.3, 0.0816, 0.326),
+    ]
+
+    def total(*x):
+        r = oblique_impact(*x[:4], friction=x[4], rtol=1e-11)
+        return jnp.sum(r.exit_angle_deg + r.exit_normal_speed + r.damage + r.w_final)
+
+    gradient = jax.grad(total, argnums=tuple(range(5)))
+    batched = np.stack(gradient(*(jnp.array(c) for c in zip(*cases))), axis=-1)
+    for case, row in zip(cases, batched):
+        loop = np.array(gradient(*(jnp.asarray(x) for x in case)))
+        np.testing.assert_allclose(row, loop, rtol=1e-8, atol=1e-12 * np.max(np.abs(loop)))
+
+
 def _jacobian_against_finite_differences(
     x,
     tolerance,
