@@ -23,8 +23,8 @@ barrier. Hence the deterministic multi-start below.
 Default problem (`SizingProblem()`, SI units; every number is a choice, stated here):
 - cases: a 1100 kg car crushing at P0 = 250 kN and a 2270 kg pickup crushing at 450 kN
   (the MASH 1100C and 2270P test masses), both at 40 km/h (11.1 m/s) and normal to the
-  barrier (the closed form of report 3.2; `barrierjax.hinge.oblique_impact` has no
-  closed form, and its batched gradients are the costly ones, see the README). Against
+  barrier (the closed form of report 3.2: `barrierjax.hinge.oblique_impact` has none,
+  and its gradients cost milliseconds per scenario, see the README). Against
   a rigid wall they would crush M v^2 / (2 P0) = 272 mm and 311 mm;
 - bounds: t in [5.2, 12.7] mm, d in [102, 305] mm with the face width b = 152 mm, so every
   section in the box is compact (AISC 360-16 Table B4.1b: the flange limit
