@@ -151,7 +151,7 @@ def test_vmap_equals_loop(oblique_batch):
 def test_batched_gradient_equals_the_loop_of_scalar_gradients():
     # A batch takes its derivatives through another path than a scalar (the directions
     # solved as problems of their own, `_solve.sensitivity`). The cases: contact to rest,
-    # a light vehicle that separates, and friction stopping the slide in contact.
+    # a light vehicle sliding with friction, and friction stopping the slide in contact.
     cases = [
         (5.0, 2.0, 0.4, 0.23, 0.0),
         (0.2, 3.0, 0.5, 0.5, 0.1),
@@ -165,8 +165,8 @@ def test_batched_gradient_equals_the_loop_of_scalar_gradients():
     gradient = jax.grad(total, argnums=tuple(range(5)))
     batched = np.stack(gradient(*(jnp.array(c) for c in zip(*cases))), axis=-1)
     for case, row in zip(cases, batched):
-        # (Unpacked from an array, as the tests above pass them: the scalar gradient's
-        # compilation is then theirs.)
+        # (Unpacked from an array, as the finite-difference tests below pass them: they
+        # then share the scalar gradient's compilation.)
         loop = np.array(gradient(*jnp.array(case)))
         np.testing.assert_allclose(row, loop, rtol=1e-8, atol=1e-12 * np.max(np.abs(loop)))
 
