@@ -151,11 +151,13 @@ def test_vmap_equals_loop(oblique_batch):
 def test_batched_gradient_equals_the_loop_of_scalar_gradients():
     # A batch takes its derivatives through another path than a scalar (the directions
     # solved as problems of their own, `_solve.sensitivity`). The cases: contact to rest,
-    # a light vehicle sliding with friction, and friction stopping the slide in contact.
+    # a light vehicle sliding with friction, friction stopping the slide in contact, and
+    # a vehicle that separates at 10 degrees.
     cases = [
         (5.0, 2.0, 0.4, 0.23, 0.0),
         (0.2, 3.0, 0.5, 0.5, 0.1),
         (0.333, 7.49, 0.3, 0.0816, 0.326),
+        (1.0, 10.0, math.sin(math.radians(10.0)), math.cos(math.radians(10.0)), 0.1),
     ]
 
     def total(*x):
