@@ -1,7 +1,7 @@
 """Scenes: a barrier, a vehicle and an impact, in any consistent unit system.
 
 Physical inputs enter here and are reduced once to the report's dimensionless groups
-(section 3.2, after (3.2.8); ERRATA.md for the scales):
+(section 3.2, after (3.2.8); docs/errata.md, 3.3.14 for the scales):
 
     length   L   = 2 (M0/q0)^(1/2)        force    P_b = 4 (M0 q0)^(1/2)
     time     t0  = m^(1/2) M0^(1/4) / q0^(3/4)

@@ -152,7 +152,7 @@ def scenario_set(n_draws: int, corners: bool, seed: int):
 
 
 # ---------------------------------------------------------------------------------------
-# Reference: the report's quadrature formulas (3.2.11)-(3.2.20), corrected per ERRATA.md,
+# Reference: the report's quadrature formulas (3.2.11)-(3.2.20), corrected per docs/errata.md,
 # evaluated with mpmath. Written from the formulas, not from barrierjax's code.
 
 

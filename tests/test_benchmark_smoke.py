@@ -1,7 +1,7 @@
 """Smoke tests of the benchmark scripts: `--quick` runs, exits 0 and writes its JSON.
 
-This checks that the benchmark script works, never how fast anything is (DESIGN.md: a
-benchmark is never a timed test).
+This checks that the benchmark script works, never how fast anything is (a benchmark is
+never a timed test: tests assert correctness, benchmarks report speed).
 """
 
 import json

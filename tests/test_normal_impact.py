@@ -66,7 +66,7 @@ def test_matches_independent_quadrature(method, mu, phi, v0):
 
 
 def test_accelerative_phase_closed_form():
-    """(3.2.11)-(3.2.14) with the ERRATA correction of (3.2.10), and D = V0 T*/2."""
+    """(3.2.11)-(3.2.14) with (3.2.10) corrected, and D = V0 T*/2 (docs/errata.md, 3.2.10)."""
     mu, phi, v0 = 3.0, 1.7, 0.9
     r = normal_impact(mu, phi, v0)
     s = float(r.s_star)
@@ -75,7 +75,7 @@ def test_accelerative_phase_closed_form():
     assert rel(r.t_star, t_star) < 1e-14
     assert rel(r.v_star, mu * v0 * (phi - s) / (phi * s + mu * (phi - s))) < 1e-14
     assert rel(r.damage, 0.5 * v0 * t_star) < 1e-14
-    # The report's printed D/V0^2 lacks the factor 1/2 (ERRATA).
+    # The report's printed D/V0^2 lacks the factor 1/2 (docs/errata.md, 3.2 damage).
     printed = mu * (math.sqrt(phi**2 + 3) - phi) / (
         phi * math.sqrt(phi**2 + 3) - phi**2 + mu * (2 * phi - math.sqrt(phi**2 + 3))
     )

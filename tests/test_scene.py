@@ -27,7 +27,7 @@ def test_groups_match_hand_calculation():
     assert float(g.scales.length) == pytest.approx(length, rel=1e-14)
     assert float(g.scales.force) == pytest.approx(force, rel=1e-14)
     assert float(g.scales.time) == pytest.approx(time, rel=1e-14)
-    # ERRATA: the velocity scale is 2 M0^(1/4) q0^(1/4) / m^(1/2) and L/t0^2 = 2 q0/m.
+    # docs/errata.md, 3.3.14: velocity scale 2 M0^(1/4) q0^(1/4) / m^(1/2), L/t0^2 = 2 q0/m.
     assert float(g.scales.velocity) == pytest.approx(2 * moment**0.25 * q0**0.25 / math.sqrt(m), rel=1e-14)
     assert float(g.scales.acceleration) == pytest.approx(length / time**2, rel=1e-14)
     assert float(g.mass_ratio) == pytest.approx(mass / (m * length), rel=1e-14)

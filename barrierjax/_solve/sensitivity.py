@@ -3,10 +3,10 @@ whichever way the caller differentiates.
 
 Reverse mode through an adaptive ODE solve stores (or recomputes) every step; forward mode
 carries the tangents along with the solution instead. With two or three parameters the
-forward Jacobian is the cheaper of the two (DESIGN.md), so the wrapped function's JVP
-materialises that Jacobian and returns its product with the tangents. The product is
-linear in the tangents and the Jacobian depends on the primals alone, so JAX transposes it
-for `jax.grad` as J^T times the cotangent, never touching the solver's loop.
+forward Jacobian is the cheaper of the two (few tangents, no stored steps), so the wrapped
+function's JVP materialises that Jacobian and returns its product with the tangents. The
+product is linear in the tangents and the Jacobian depends on the primals alone, so JAX
+transposes it for `jax.grad` as J^T times the cotangent, never touching the solver's loop.
 """
 
 import jax

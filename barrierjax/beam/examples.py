@@ -16,7 +16,7 @@ Schemes (`scheme`):
 - "report": the report's linear acceleration with its alpha scheme for the fibres (4.2.8)-
   (4.2.45). It is unstable at the report's steps (the stable step of the axial modes of 1 in
   steel elements is a few microseconds; see `integrate.stable_step`) and returns NaN there;
-  it is kept to show that (ERRATA: 4.2).
+  it is kept to show that (docs/errata.md, 4.2.41).
 For the implicit schemes the report's steps are divided into `substeps` equal sub-steps
 (default: the fewest giving sub-steps <= 1e-4 s for Example 1, <= 2.5e-5 s for Examples 2 and
 3, measured: Example 2 diverges at 8.25e-5 s, Example 3 leaves a step unconverged at 1e-4 s),

@@ -9,10 +9,10 @@ hinge extends at 2 (N/N0)(M0/N0) times its rotation rate, so that (3.4.33)
 
     n = N/N0 = N0 w0 / (4 M0) = 2 eta0 W0,   eta0 = N0 / (4 (M0 q0)^1/2),
 
-in the dimensionless variables of 3.2 (ERRATA). The moment equation of the half-beam
+in the dimensionless variables of 3.2 (docs/errata.md, 3.3.14). The moment equation of the half-beam
 (3.4.28) holds 2 M + N w0 = 2 M0 (1 - n^2) + 4 M0 n^2 = 2 M0 (1 + n^2): the axial force
 stiffens the mechanism as if M0 were M0 (1 + n^2), and (3.4.34)-(3.4.35) read, with
-K = 3/2 (1 + n^2) (ERRATA for the first line of (3.4.34)),
+K = 3/2 (1 + n^2) (docs/errata.md, 3.4.34),
 
     V0'    = 2 phi / S - 1/2 - K / S^2
     V0 S'  = K / S - S/2 - phi                                            (3.4.35)

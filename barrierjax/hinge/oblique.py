@@ -1,7 +1,7 @@
 """Oblique impact of a rigid-plastic vehicle on a rigid-plastic beam on a rigid-plastic
 backing (report section 3.3), and the moving constant load of its accelerative phase.
 
-Dimensionless variables as in 3.2 (ERRATA): lengths over L = 2 (M0/q0)^1/2, forces over
+Scales as in 3.2 (docs/errata.md, 3.3.14): lengths over L = 2 (M0/q0)^1/2, forces over
 P_b = 4 (M0 q0)^1/2, time over t0 = m^1/2 M0^1/4 / q0^3/4, mass ratio mu = M/(m L). The
 contact point moves along the beam at the vehicle's tangential speed V_H; S1 is the
 distance from the contact point to the hinge ahead of it (the right hinge), S2 to the
@@ -13,7 +13,7 @@ Equations of motion, (3.3.16) with the force ratio g = P/P_b and the load speed 
     V0 (S1' + 3/2 c) = 3/4 (S1 + S2)/(S1 S2) - S1/2 - 2 g S1 / (S1 + S2)
     V0 (S2' - 3/2 c) = 3/4 (S1 + S2)/(S1 S2) - S2/2 - 2 g S2 / (S1 + S2)
 
-(3.3.10 as corrected in ERRATA: 4P in the first line, P xi2 in the third.)
+((3.3.10) as corrected in docs/errata.md, 3.3.10: 4P in the first line, P xi2 in the third.)
 
 The memory of 3.3.4-3.3.6. A point x ahead of the load lies still until the right hinge
 reaches it, then rides the right rigid segment, whose slope rate is -V0/S1, until the load

@@ -21,7 +21,7 @@ the upper yield stress (2.3.5)
 evaluated here as sigma0 {E (1 + beta) A alpha / (d^3 sigma0)}^(1/(1+beta)), which
 neither overflows nor underflows in single precision.
 
-The report's quoted coefficients (ERRATA.md) are not reproduced. With steel E = 30e6 psi,
+The report's quoted coefficients are not reproduced (docs/errata.md, 2.3.5). Steel E = 30e6 psi,
 G = 11.5e6 psi, sigma0 = 2G/45 = 511,111 psi, A = 1.2e-6 mm^3 s, beta = 9, alpha in 1/s and
 d = n^(-1/2) mm for n grains per mm^2, (2.3.5) gives
 
