@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from barrierjax._solve.hermite import quintic_hermite
-from barrierjax.hinge import normal_impact, oblique
+from barrierjax.hinge import normal_impact
 from barrierjax.hinge.oblique import moving_load, oblique_impact
+from barrierjax.hinge.oblique.results import displacement_field
 
 # Light and moderate vehicles (mu <= 5); see the module's notes on heavy ones.
 NORMAL_CASES = [(5.0, 2.0, 0.6), (0.05, 20.0, 0.2), (1.0, 1.5, 0.7)]
@@ -72,7 +73,7 @@ def test_max_deflection_is_the_peak_of_the_final_shape(oblique_batch):
             float(jnp.max(samples["position"] + samples["s1"])),
             16385,
         )
-        shape = np.asarray(oblique._displacement_field(samples, jnp.asarray(n), x)[-1])
+        shape = np.asarray(displacement_field(samples, jnp.asarray(n), x)[-1])
         peak = int(np.argmax(shape))
         assert 0.0 <= float(x[peak]) <= float(samples["position"][-1]) + float(x[1] - x[0])
         assert float(r.max_deflection[i]) == pytest.approx(shape[peak], rel=1e-5)
@@ -199,7 +200,7 @@ def test_gradients_match_finite_differences_before_the_memory_is_read():
 
 def test_gradients_match_finite_differences_reading_the_memory():
     # The load crosses S* and H(T*), where the deposited curvature has a kink and a jump,
-    # and the jump propagates (oblique._contact_segments).
+    # and the jump propagates (`barrierjax.hinge.oblique.transitions.transition`).
     _jacobian_against_finite_differences(jnp.array([5.0, 2.0, 0.3, 0.52, 0.1]), 1e-4)
 
 
