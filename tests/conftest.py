@@ -1,4 +1,37 @@
 import jax
+import pytest
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
+
+
+def _jax_arrays_in(expected):
+    if isinstance(expected, jax.Array):
+        return True
+    if isinstance(expected, dict):
+        return any(_jax_arrays_in(v) for v in expected.values())
+    if isinstance(expected, (list, tuple)):
+        return any(_jax_arrays_in(v) for v in expected)
+    return False
+
+
+_pytest_approx = pytest.approx
+
+
+def _approx_of_plain_values(expected, *args, **kwargs):
+    """`pytest.approx`, refusing a JAX array on the expected side.
+
+    pytest reads numpy's protocol (`.flat`, `__array__`) on the expected value, and what it
+    reads changes between releases: pytest 9.2 reads `.flat`, which JAX arrays do not have.
+    Refusing them here makes the pinned test environment fail the way the newest would.
+    """
+    if _jax_arrays_in(expected):
+        raise TypeError(
+            "pytest.approx: the expected value is (or holds) a JAX array; pass float(x) or "
+            "np.asarray(x) instead (pytest reads numpy's protocol on it, e.g. `.flat` in "
+            "pytest>=9.2, which JAX arrays do not implement)"
+        )
+    return _pytest_approx(expected, *args, **kwargs)
+
+
+pytest.approx = _approx_of_plain_values

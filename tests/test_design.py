@@ -170,7 +170,7 @@ def test_vmap_equals_loop(problem, evaluate):
         )
     # Rigid barrier: each vehicle crushes M v^2 / (2 P0), nothing deflects.
     c = problem.cases
-    rigid = np.mean(0.5 * c.mass * c.speed**2 / c.crush_force)
+    rigid = float(np.mean(0.5 * np.asarray(c.mass * c.speed**2 / c.crush_force)))
     assert float(batched_f[2]) == pytest.approx(rigid, rel=1e-12)
     assert float(batched_c[2]) == pytest.approx(-float(problem.deflection_limit))
 
