@@ -25,6 +25,7 @@ __all__ = [
     "deflected_shape_figure",
     "dense_times",
     "draw_plan",
+    "first_free",
     "hermite",
     "histories_figure",
     "is_oblique",
@@ -208,9 +209,11 @@ def deflected_shape_figure(result, count: int = 6, title: str | None = None) -> 
 # Oblique impact (report 3.3): the load moves along the barrier, and the vehicle leaves.
 
 
-def _first_free(h) -> int:
-    """Index of the first sample after contact (zero contact force): where the vehicle
-    leaves, after a separation or with the barrier at rest; the last sample if none."""
+def first_free(h) -> int:
+    """Index of the first sample after contact (zero contact force) in a history `h` (a
+    dict of arrays with "time" and "contact_force"): where the vehicle leaves, after a
+    separation or with the barrier at rest; the last sample if none. Public: the oblique
+    figures of `barrierjax.figures` mark the same sample."""
     free = np.flatnonzero(h["contact_force"] == 0.0)
     return int(free[0]) if free.size else h["time"].shape[0] - 1
 
@@ -219,7 +222,7 @@ def _oblique_marks(result, h):
     """(end of the crushing phase, separation time or None), in seconds."""
     t_star = float(result.model.t_star) * float(result.groups.scales.time)
     separated = bool(np.asarray(result.model.separated) > 0.5)
-    return t_star, h["time"][_first_free(h)] if separated else None
+    return t_star, h["time"][first_free(h)] if separated else None
 
 
 def _mark_phases(axes, t_star, t_sep):
@@ -301,7 +304,7 @@ def oblique_deflected_shape_figure(result, count: int = 6, title: str | None = N
     phase to rest; a dot marks the contact point while the vehicle is on the barrier."""
     h = _history(result)
     x = h["x"]
-    leave = _first_free(h)
+    leave = first_free(h)
     fig = Figure(figsize=(10, 4.8), layout="constrained")
     ax = fig.subplots()
     for n, k in enumerate(shape_times(result, count)):
@@ -397,7 +400,7 @@ def path_figure(result, count: int = 6, title: str | None = None) -> Figure:
     the contact point (grey). The lateral scale is exaggerated, so the impact and exit
     speeds and angles are written out: the lines' slopes are not the angles."""
     h = _history(result)
-    leave = _first_free(h)
+    leave = first_free(h)
     marks = shape_times(result, count)
     t = h["time"]
     approach = (float(h["vehicle_tangential_velocity"][0]), float(h["vehicle_velocity"][0]))

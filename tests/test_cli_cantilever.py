@@ -10,10 +10,11 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-from barrierjax import cli, figures, figures_beam
+from barrierjax import cli, figures
 from barrierjax.beam import report_example, tip_rest
 from barrierjax.beam.examples import plastic_moment
 from barrierjax.beam.plots import deformed_shape
+from barrierjax.figures import chapter4
 
 SHORT = ("--t-end", "0.016", "--dt", "2e-4", "--elements", "3")
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -148,7 +149,7 @@ def test_figures_4_3_registered_and_drawn(capsys, tmp_path, monkeypatch, short_r
     assert figures.FIGURES["4.3.2"].printed and not figures.FIGURES["4.3.7"].printed
     assert "Free End" in figures.FIGURES["4.3.7"].caption
     # the full examples take minutes; the drawing is checked on the short runs
-    monkeypatch.setattr(figures_beam, "example_runs", lambda n: short_runs)
+    monkeypatch.setattr(chapter4, "example_runs", lambda n: short_runs)
     status, _, err = run(capsys, "figures", "--out", str(tmp_path), "--only", *numbers)
     assert status == 0, err
     for number in numbers:

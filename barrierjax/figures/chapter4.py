@@ -23,9 +23,9 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
-from .beam import report_example
-from .beam.plots import shape_figure, tip_figure
-from .beam.section import (
+from ..beam import report_example
+from ..beam.plots import shape_figure, tip_figure
+from ..beam.section import (
     moment_curvature,
     moment_curvature_bar,
     moment_elastic_plastic,
@@ -35,7 +35,7 @@ from .beam.section import (
     static_moment,
     yield_surface,
 )
-from .figures import _title, figure
+from .registry import figure, title
 
 EXAMPLE_1 = {"E": 30e6, "sigma0": 29_000.0, "depth": 0.177, "width": 0.644, "D": 40.0, "q": 5.0}
 KAPPA_RATES_4_1 = (0.1, 0.5, 1.0, 2.0)  # dimensionless curvature rates E kappa' tau* h/sigma0
@@ -75,7 +75,7 @@ def _figure_4_1_2() -> Figure:
     right.legend(fontsize=8, title="kappa', 1/(in s)")
     for ax in (left, right):
         ax.grid(True, alpha=0.3)
-    _title(fig, "4.1.2", "constant curvature rate from rest (4.1.9)-(4.1.12)")
+    title(fig, "4.1.2", "constant curvature rate from rest (4.1.9)-(4.1.12)")
     return fig
 
 
@@ -95,7 +95,7 @@ def _figure_4_1_3() -> Figure:
     ax.set_ylabel("M / M0")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
-    _title(fig, "4.1.3", "E kappa' tau* h / sigma0 = 1 (alpha = 0.65 minimises the largest error)")
+    title(fig, "4.1.3", "E kappa' tau* h / sigma0 = 1 (alpha = 0.65 minimises the largest error)")
     return fig
 
 
@@ -122,7 +122,7 @@ def _figure_4_1_7() -> Figure:
     ax.set_ylim(0, None)
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
-    _title(
+    title(
         fig,
         "4.1.7",
         "(4.1.45)-(4.1.46), D = (lambda_'^2 + (4/3) kappa_'^2)^1/2; dotted: 4N^2 + 3M^2 = D^2",
@@ -145,13 +145,13 @@ def example_runs(n: int) -> dict:
 
 def _configuration(number: str, n: int) -> Figure:
     fig = shape_figure(example_runs(n))
-    _title(fig, number, "thin: the law (4.3.1) at earlier times")
+    title(fig, number, "thin: the law (4.3.1) at earlier times")
     return fig
 
 
 def _tip(number: str, n: int) -> Figure:
     fig = tip_figure(example_runs(n))
-    _title(fig, number, "solid: the law (4.3.1); dashed: rate-independent; grey: the tip at rest")
+    title(fig, number, "solid: the law (4.3.1); dashed: rate-independent; grey: the tip at rest")
     return fig
 
 

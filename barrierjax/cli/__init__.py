@@ -1,0 +1,186 @@
+"""The `barrierjax` command line.
+
+    barrierjax run [SCENE.toml] [--json] [--out DIR] [--no-plots]
+    barrierjax run cantilever-N [--rate-independent] [--scheme S] [--dt S] [--t-end S]
+                                [--elements N] [--json] [--out DIR] [--no-plots]
+    barrierjax figures [--out DIR] [--only NUMBER ...]
+    barrierjax optimize [--json]
+
+`run` solves a scene file (the built-in default scene without one; format in
+`barrierjax.scene_file`) with `barrierjax.simulate`, prints a summary (or one JSON object
+in SI units with `--json`) and writes plots of the histories; `run cantilever-1` (-2, -3)
+runs the report's beam Example 1 (2, 3) of 4.3 with `barrierjax.beam.report_example`
+instead, in the report's inch-pound units. `figures` writes the
+report's figures (`barrierjax.figures.FIGURES`). `optimize` runs the default barrier
+design of `barrierjax.design`.
+
+The command is thin: the work is done by public functions (`scene_file.load_scene`,
+`simulate`, `result_dict`, `format_summary`, `plotting.write_run_plots`,
+`figures.write_figures`). Progress goes to stderr, results to stdout. A bad scene file or
+an unsupported scene ends with one line `error: [section] key: ...` on stderr and exit
+status 2, never a traceback.
+
+One module per command: `run` (and the scene summary, `result_dict`, `format_summary`),
+`cantilever` (`run cantilever-N`), `figures`, `optimize`; `output` holds what they share
+(`CommandError`, exit statuses, progress messages, double precision, printing results).
+This package holds the parser and `main`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .cantilever import (
+    CANTILEVER,
+    CANTILEVER_OPTIONS,
+    NEWTON_WARNING,
+    cantilever_dict,
+    format_cantilever_summary,
+)
+from .figures import figures_command
+from .optimize import optimize_command
+from .output import EXIT_FAILED, EXIT_OK, EXIT_USAGE, CommandError, enable_x64
+from .run import STANDARD_GRAVITY, format_summary, result_dict, run_command
+
+__all__ = [
+    "CANTILEVER",
+    "CANTILEVER_OPTIONS",
+    "EXIT_FAILED",
+    "EXIT_OK",
+    "EXIT_USAGE",
+    "NEWTON_WARNING",
+    "STANDARD_GRAVITY",
+    "CommandError",
+    "build_parser",
+    "cantilever_dict",
+    "format_cantilever_summary",
+    "format_summary",
+    "main",
+    "result_dict",
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the `barrierjax` command."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        release = version("barrierjax")
+    except PackageNotFoundError:  # pragma: no cover - running from a bare checkout
+        release = "unknown"
+    parser = argparse.ArgumentParser(
+        prog="barrierjax",
+        description="Differentiable impact-dynamics models for highway barriers "
+        "(rigid-plastic vehicle, beam and backing; report section 3.2).",
+        epilog="Run 'barrierjax COMMAND --help' for a command's options.",
+    )
+    parser.add_argument("--version", action="version", version=f"barrierjax {release}")
+    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
+
+    run = commands.add_parser(
+        "run",
+        help="simulate a scene file (or the default scene)",
+        description="Simulate the impact of a vehicle on a barrier described by a TOML "
+        "scene file, print a summary with units (or one JSON object in SI units), and "
+        "write plots of the histories.",
+        epilog="Scene file: sections [barrier] (plastic_moment, mass_per_length, "
+        "backing_strength, axial_capacity optional), [vehicle] (mass, crush_force), "
+        "[impact] (speed, angle optional, default '90 deg', friction optional, default 0); "
+        "quantities are strings with units, e.g. plastic_moment = \"105 kN*m\", "
+        "speed = \"40 km/h\", or inch-pound units such as \"1e6 lbf*in\". Without a file "
+        "the default scene is run: a steel tube HSS 203x152x6.4 on a foam backing struck "
+        "normally by a 2270 kg pickup at 40 km/h (barrierjax/default_scene.toml). "
+        "Errors in the file exit with status 2 and one line naming the key.",
+    )
+    run.add_argument(
+        "scene", nargs="?", type=Path, metavar="SCENE.toml",
+        help="scene file (default: the built-in default scene)",
+    )
+    run.add_argument(
+        "--json", action="store_true",
+        help="print one JSON object with the results in SI units (keys damage_m, "
+        "max_deflection_m, duration_s, peak_deceleration_g, ...) and nothing else on stdout",
+    )
+    run.add_argument(
+        "--out", type=Path, default=Path("barrierjax-out"), metavar="DIR",
+        help="folder for the plots (default: ./barrierjax-out)",
+    )
+    run.add_argument("--no-plots", action="store_true", help="do not write plots")
+    beam = run.add_argument_group(
+        "cantilever-N",
+        "'barrierjax run cantilever-1' (-2, -3) runs the report's Example 1 (2, 3) of 4.3, "
+        "a cantilever struck at its tip (barrierjax.beam.report_example), prints the tip's "
+        "displacement at rest (at its largest deflection) and at the end in the report's inch-pound units, and "
+        "writes deformed_shape.png, tip_histories.png and root_histories.png",
+    )
+    beam.add_argument(
+        "--rate-independent", action="store_true",
+        help="elastic-perfectly plastic at the static yield stress instead of Cowper-Symonds",
+    )
+    beam.add_argument(
+        "--scheme",
+        choices=("damped-newmark", "newmark", "linear-acceleration", "report"),
+        help="time integration (default damped-newmark; 'report' is the report's scheme, "
+        "unstable at its steps)",
+    )
+    beam.add_argument("--dt", type=float, metavar="S", help="step after the pulse (s)")
+    beam.add_argument("--t-end", type=float, metavar="S", help="end of the run (s)")
+    beam.add_argument("--elements", type=int, metavar="N", help="number of elements")
+    run.set_defaults(handler=run_command)
+
+    figures = commands.add_parser(
+        "figures",
+        help="write the report's figures as PNG files",
+        description="Reproduce the report's figures (sections 3.2 and 3.3 so far) as PNG "
+        "files named by figure number (fig_3_2_2.png, ...), printing each path written.",
+    )
+    figures.add_argument(
+        "--out", type=Path, default=Path("barrierjax-figures"), metavar="DIR",
+        help="folder for the figures (default: ./barrierjax-figures)",
+    )
+    figures.add_argument(
+        "--only", nargs="+", metavar="NUMBER",
+        help="figure numbers to write, e.g. 3.2.4 (default: all)",
+    )
+    figures.set_defaults(handler=figures_command)
+
+    optimize = commands.add_parser(
+        "optimize",
+        help="optimize the default barrier design",
+        description="Size the default barrier with barrierjax.design.optimize_default "
+        "and print its report.",
+    )
+    optimize.add_argument(
+        "--json", action="store_true", help="print the report as one JSON object"
+    )
+    optimize.set_defaults(handler=optimize_command)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the `barrierjax` command with `argv` (default: `sys.argv[1:]`); returns the
+    exit status (0 success, 1 failure, 2 bad usage or bad scene)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # --help, --version, or a usage error already printed
+        return exit_.code if isinstance(exit_.code, int) else EXIT_USAGE
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    enable_x64()
+    from ..scene_file import SceneFileError
+
+    try:
+        return args.handler(args)
+    except SceneFileError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except CommandError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return error.status
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,7 @@
+"""`python -m barrierjax.cli`: the `barrierjax` command."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

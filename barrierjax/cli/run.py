@@ -1,0 +1,223 @@
+"""`barrierjax run [SCENE.toml]`: solve a scene with `barrierjax.simulate`, print its
+summary (`result_dict`, `format_summary`) or one JSON object, and write its plots
+(`run cantilever-N` is handed to `barrierjax.cli.cantilever`)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from .cantilever import cantilever_number, run_cantilever
+from .output import EXIT_FAILED, CommandError, as_float, print_result, progress, progress_after
+
+__all__ = ["STANDARD_GRAVITY", "format_summary", "result_dict", "run_command"]
+
+STANDARD_GRAVITY = 9.80665  # m/s^2, to express decelerations in g
+
+
+def result_dict(scene, result, name: str = "") -> dict:
+    """The scene and its `simulate` result as a flat JSON-ready dict in SI units (keys
+    carry the unit: `damage_m`, `duration_s`, `peak_deceleration_g`, energies in J)."""
+    barrier, vehicle, impact = scene.barrier, scene.vehicle, scene.impact
+    groups, scales = result.groups, result.groups.scales
+    deceleration = as_float(result.peak_deceleration)
+    return {
+        "scene": name,
+        "model": (
+            "oblique impact with convective terms (report 3.3)"
+            if result.model.__class__.__name__ != "NormalImpact"
+            else "normal impact, rigid-plastic vehicle, beam and backing (report 3.2)"
+            if groups.axial_ratio is None
+            else "normal impact on a beam held against axial motion (report 3.4)"
+        ),
+        "inputs": {
+            "plastic_moment_N_m": as_float(barrier.plastic_moment),
+            "mass_per_length_kg_m": as_float(barrier.mass_per_length),
+            "backing_strength_N_m": as_float(barrier.backing_strength),
+            "axial_capacity_N": None
+            if barrier.axial_capacity is None
+            else as_float(barrier.axial_capacity),
+            "vehicle_mass_kg": as_float(vehicle.mass),
+            "crush_force_N": as_float(vehicle.crush_force),
+            "speed_m_s": as_float(impact.speed),
+            "angle_deg": as_float(impact.angle_deg),
+            "friction": as_float(impact.friction),
+        },
+        "mass_ratio": as_float(groups.mass_ratio),
+        "force_ratio": as_float(groups.force_ratio),
+        "speed_dimensionless": as_float(groups.normal_speed),
+        "axial_ratio": None if groups.axial_ratio is None else as_float(groups.axial_ratio),
+        "length_scale_m": as_float(scales.length),
+        "force_scale_N": as_float(scales.force),
+        "time_scale_s": as_float(scales.time),
+        "damage_m": as_float(result.damage),
+        "max_deflection_m": as_float(result.max_deflection),
+        "duration_s": as_float(result.duration),
+        "accelerative_phase_s": as_float(result.model.t_star * scales.time),
+        "string_start_s": _string_start(result, scales),
+        "peak_force_N": as_float(result.peak_force),
+        "peak_deceleration_m_s2": deceleration,
+        "peak_deceleration_g": deceleration / STANDARD_GRAVITY,
+        "hinge_extent_m": as_float(result.hinge_extent),
+        "exit_speed_m_s": as_float(result.exit_speed),
+        "exit_angle_deg": as_float(result.exit_angle_deg),
+        "kinetic_energy_J": as_float(result.kinetic_energy),
+        "crush_work_J": as_float(result.crush_work),
+        "backing_work_J": as_float(result.backing_work),
+        "hinge_work_J": as_float(result.hinge_work),
+        "friction_work_J": as_float(result.friction_work),
+        "slope_work_J": as_float(result.slope_work),
+        "string_work_J": as_float(result.string_work),
+        "exit_kinetic_energy_J": as_float(0.5 * scene.vehicle.mass * result.exit_speed**2),
+        "energy_balance_error_J": as_float(
+            result.crush_work
+            + result.backing_work
+            + result.hinge_work
+            + result.friction_work
+            + result.slope_work
+            + result.string_work
+            + 0.5 * scene.vehicle.mass * result.exit_speed**2
+            - result.kinetic_energy
+        ),
+    }
+
+
+def _string_start(result, scales) -> float | None:
+    """When N reached N0 and the beam became a plastic string, or None if it never did."""
+    t_string = getattr(result.model, "t_string", None)
+    if t_string is None or not math.isfinite(float(t_string)):
+        return None
+    return as_float(t_string * scales.time)
+
+
+def _phases(data: dict) -> str:
+    crushing = f"{data['accelerative_phase_s'] * 1e3:.1f} ms"
+    string = data["string_start_s"]
+    if string is None:
+        return f"vehicle crushes for the first {crushing}"
+    if string <= data["accelerative_phase_s"]:
+        return f"plastic string from {string * 1e3:.1f} ms, in the crushing phase"
+    return f"crushing phase {crushing}; plastic string from {string * 1e3:.1f} ms"
+
+
+def format_summary(data: dict) -> str:
+    """A readable summary of `result_dict(...)`: the scene, its dimensionless groups and
+    the results with units, and where the vehicle's kinetic energy went."""
+    i = data["inputs"]
+    kinetic = data["kinetic_energy_J"]
+
+    def share(joules):
+        return f"{joules / 1e3:9.2f} kJ  {100.0 * joules / kinetic:5.1f} %"
+
+    axial = i["axial_capacity_N"]
+    lines = [
+        f"Scene: {data['scene']}",
+        f"  barrier  plastic moment    M0 = {i['plastic_moment_N_m'] / 1e3:10.2f} kN*m",
+        f"           mass per length   m  = {i['mass_per_length_kg_m']:10.2f} kg/m",
+        f"           backing strength  q0 = {i['backing_strength_N_m'] / 1e3:10.2f} kN/m",
+        "           axial capacity    N0 = "
+        + ("      none" if axial is None else f"{axial / 1e3:10.2f} kN"),
+        f"  vehicle  mass              M  = {i['vehicle_mass_kg']:10.1f} kg",
+        f"           crush force       P0 = {i['crush_force_N'] / 1e3:10.2f} kN",
+        f"  impact   speed             v  = {i['speed_m_s']:10.3f} m/s"
+        f" ({i['speed_m_s'] * 3.6:.1f} km/h)",
+        f"           angle                = {i['angle_deg']:10.1f} deg",
+        f"           friction             = {i['friction']:10.3f}",
+        "",
+        "Dimensionless groups (report 3.2)",
+        f"  mass ratio   mu  = M / (m L)   = {data['mass_ratio']:.4g}",
+        f"  force ratio  phi = P0 / P_b    = {data['force_ratio']:.4g}",
+        f"  speed        V0  = v t0 / L    = {data['speed_dimensionless']:.4g}",
+        *(
+            []
+            if data["axial_ratio"] is None
+            else [f"  axial ratio  eta0 = N0 / P_b   = {data['axial_ratio']:.4g}"]
+        ),
+        f"  scales       L = {data['length_scale_m']:.4g} m, "
+        f"P_b = {data['force_scale_N'] / 1e3:.4g} kN, t0 = {data['time_scale_s'] * 1e3:.4g} ms",
+        "",
+        f"Results: {data['model']}",
+        f"  vehicle damage (crush)        {data['damage_m'] * 1e3:10.1f} mm",
+        f"  max barrier deflection        {data['max_deflection_m'] * 1e3:10.1f} mm",
+        f"  duration (contact to rest)    {data['duration_s'] * 1e3:10.1f} ms   ({_phases(data)})",
+        f"  peak contact force            {data['peak_force_N'] / 1e3:10.1f} kN",
+        f"  peak vehicle deceleration     {data['peak_deceleration_g']:10.1f} g"
+        f"   ({data['peak_deceleration_m_s2']:.1f} m/s^2)",
+        f"  hinge extent (each side)      {data['hinge_extent_m']:10.3f} m",
+        f"  exit speed and angle          {data['exit_speed_m_s']:10.2f} m/s"
+        f" at {data['exit_angle_deg']:.1f} deg",
+        "",
+        f"Energy partition (vehicle kinetic energy {kinetic / 1e3:.2f} kJ)",
+        f"  vehicle crush          {share(data['crush_work_J'])}",
+        f"  backing crush          {share(data['backing_work_J'])}",
+        f"  beam plastic hinges    {share(data['hinge_work_J'])}",
+        f"  friction               {share(data['friction_work_J'])}",
+        f"  normal force x slope   {share(data['slope_work_J'])}",
+        f"  plastic string         {share(data['string_work_J'])}",
+        f"  kept by the vehicle    {share(data['exit_kinetic_energy_J'])}",
+        f"  balance error          {data['energy_balance_error_J']:.2e} J",
+    ]
+    return "\n".join(lines)
+
+
+def _model_error(error: Exception) -> str:
+    """The message a model raised at run time, without the traceback XLA wraps it in."""
+    marker = "_EquinoxRuntimeError: "
+    lines = [line for line in str(error).splitlines() if marker in line]
+    return lines[-1].split(marker, 1)[1].strip() if lines else " ".join(str(error).split())
+
+
+def _scene_error(error: Exception) -> CommandError:
+    """A library error about a scene (ValueError, NotImplementedError), worded by the
+    scene-file key it concerns."""
+    from ..scene_file import field_key
+
+    message = " ".join(str(error).split())
+    field = field_key(message)
+    if field is not None:
+        message = f"[{field.section}] {field.key}: {message}"
+    return CommandError(message)
+
+
+def run_command(args) -> int:
+    """`barrierjax run [SCENE.toml | cantilever-N]`: returns the exit status."""
+    import jax
+
+    from .. import plotting, scene_file
+    from ..simulate import simulate
+
+    n = cantilever_number(args)
+    if n is not None:
+        return run_cantilever(args, n)
+    if args.scene is None:
+        name = "default scene (barrierjax/default_scene.toml)"
+        scene = scene_file.default_scene()
+    else:
+        name = str(args.scene)
+        scene = scene_file.load_scene(args.scene)
+    try:
+        with progress_after("compiling and solving the impact model (report 3.2/3.3)..."):
+            result = simulate(scene)
+            jax.block_until_ready(result)
+    except jax.errors.JaxRuntimeError as error:  # a model's run-time check (equinox.error_if)
+        raise CommandError(_model_error(error), EXIT_FAILED) from None
+    except (NotImplementedError, ValueError) as error:
+        raise _scene_error(error) from None
+    data = result_dict(scene, result, name)
+    bad = [k for k, v in data.items() if isinstance(v, float) and not math.isfinite(v)]
+    if bad:
+        raise CommandError(f"the solution is not finite ({', '.join(bad)})", EXIT_FAILED)
+    plots = []
+    if not args.no_plots:
+        inputs = data["inputs"]
+        angle = "" if inputs["angle_deg"] == 90.0 else f" at {inputs['angle_deg']:g} deg"
+        title = (
+            f"{Path(name).stem if args.scene else 'default scene'}: "
+            f"{inputs['vehicle_mass_kg']:.0f} kg at {inputs['speed_m_s'] * 3.6:.1f} km/h"
+            f"{angle} "
+            rf"($\mu$ = {data['mass_ratio']:.3g}, $\phi$ = {data['force_ratio']:.3g})"
+        )
+        plots = plotting.write_run_plots(
+            result, args.out, title=title, progress=lambda p: progress(f"writing {p}")
+        )
+    return print_result(args, data, plots, format_summary)
