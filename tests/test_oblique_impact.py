@@ -1,6 +1,7 @@
 """barrierjax.hinge.oblique_impact and moving_load (report 3.3)."""
 
 import math
+import re
 
 import jax
 import jax.numpy as jnp
@@ -257,6 +258,33 @@ def test_bad_input_names_the_field(kwargs, field):
     friction = args.pop("friction", 0.0)
     with pytest.raises(ValueError, match=field):
         oblique_impact(**args, friction=friction)
+
+
+def test_spent_step_budget_grows_or_says_what_to_pass():
+    # Three times the steady-state test's run: about 2400 steps, past the first budget.
+    phi, vh, t_end = 2.0, 1.0, 180.0
+    with pytest.raises(RuntimeError) as given:
+        moving_load(phi, vh, t_end, max_steps=1024)
+    message = str(given.value)
+    assert "\n" not in message and "max_steps=1024 was spent in the moving load" in message
+    suggested = int(re.search(r"pass max_steps=(\d+) or more", message).group(1))
+    assert suggested > 1024
+    # With no budget given it grows by itself to the one suggested, which completes.
+    grown = moving_load(phi, vh, t_end)
+    assert int(grown.history.n_saved) > 1024
+    assert grown.history.time.shape[-1] == suggested + 8  # the recording's rows: the budget's
+    assert float(grown.s1) == pytest.approx(phi - math.sqrt(phi**2 - 1.0), rel=1e-6)
+
+
+def test_float32_defaults_to_a_tolerance_it_can_meet():
+    # As for a user who has not enabled float64. A default rtol of 1e-8, below float32's
+    # resolution, shrank the steps until the budget was spent.
+    with jax.enable_x64(False):
+        r = moving_load(2.0, 1.0, 100.0)
+        assert r.s1.dtype == jnp.float32
+        assert float(r.s1) == pytest.approx(2.0 - math.sqrt(3.0), rel=1e-4)
+        with pytest.raises(ValueError, match=r"rtol must be at least 1.2e-05 in float32"):
+            moving_load(2.0, 1.0, 100.0, rtol=1e-8)
 
 
 def test_load_catching_up_with_the_hinge_is_an_error_not_a_blow_up():

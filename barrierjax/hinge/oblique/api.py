@@ -1,10 +1,13 @@
 """The public functions of report 3.3: `oblique_impact` and `moving_load`."""
 
 import functools
+import math
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
+from jax.core import Tracer
 
 from ... import _checks
 from ..._solve.queue import solve_queued
@@ -19,16 +22,84 @@ from .results import (
     padded,
     plastic_zone_grid,
 )
-from .transitions import initial_carry, outcome_of, raise_failures, step_loop
+from .transitions import (
+    OVERTAKEN_MESSAGE,
+    initial_carry,
+    outcome_of,
+    phase_name,
+    raise_failures,
+    step_loop,
+)
 
 _N_X = 129
 
 
+# The default tolerance, and the smallest one a dtype can meet: below about a hundred
+# roundings the step control cannot reach it, and the steps shrink until the budget is spent.
+_DEFAULT_RTOL, _ROUNDINGS = 1e-8, 100.0
+
+
+def _tolerance(rtol, dtype):
+    """`rtol` as an array of `dtype`; `None` is the default, or the smallest tolerance
+    the dtype can meet where that is larger (float32: 1.2e-5)."""
+    smallest = _ROUNDINGS * float(jnp.finfo(dtype).eps)
+    if rtol is None:
+        return jnp.asarray(max(_DEFAULT_RTOL, smallest), dtype)
+    if rtol < smallest:
+        raise ValueError(
+            f"rtol must be at least {smallest:.2g} in {jnp.dtype(dtype).name}; got {rtol!r} "
+            "(pass a larger rtol, or enable float64: "
+            'jax.config.update("jax_enable_x64", True))'
+        )
+    return jnp.asarray(rtol, dtype)
+
+
 def _check_options(rtol, max_steps):
-    if not 0.0 < rtol < 1.0:
+    if rtol is not None and not 0.0 < rtol < 1.0:
         raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
-    if int(max_steps) != max_steps or max_steps < 16:
-        raise ValueError(f"max_steps must be an integer >= 16; got {max_steps!r}")
+    if max_steps is not None and (int(max_steps) != max_steps or max_steps < 16):
+        raise ValueError(f"max_steps must be None or an integer >= 16; got {max_steps!r}")
+
+
+# The step budget a solve starts with when none is given, and the largest it grows to by
+# itself (a recording holds a row per step: 74 kB a lane at 1024 steps without history).
+_FIRST_BUDGET, _LARGEST_BUDGET = 1024, 65536
+
+
+def _within_budget(solve, max_steps, larger, *, moving_load=False):
+    """`solve(budget)`'s result, where `solve` returns (result, `Outcome`).
+
+    Traced inside a caller's `jit`, `vmap` or `grad`, failures are run-time errors
+    (`raise_failures`). Otherwise they raise here, in one line that says what to pass; and
+    with `max_steps=None` a spent budget grows by itself, to `larger(budget, outcome)`
+    (a new compilation each time), up to `_LARGEST_BUDGET`."""
+    name = "moving_load" if moving_load else "oblique_impact"
+    budget = _FIRST_BUDGET if max_steps is None else int(max_steps)
+    while True:
+        result, outcome = solve(budget)
+        if isinstance(outcome.complete, Tracer):
+            return raise_failures(result, outcome, moving_load)
+        if np.any(outcome.overtaken):
+            raise RuntimeError(f"{name}: {OVERTAKEN_MESSAGE}")
+        spent = ~np.asarray(outcome.complete).ravel()
+        if not spent.any():
+            return result
+        suggestion = larger(budget, outcome)
+        if max_steps is None and suggestion <= _LARGEST_BUDGET:
+            budget = suggestion
+            continue
+        first = np.flatnonzero(spent)[0]
+        phase = phase_name(int(np.asarray(outcome.phase).ravel()[first]), moving_load)
+        time = float(np.asarray(outcome.time).ravel()[first])
+        raise RuntimeError(
+            f"{name}: the step budget max_steps={budget} was spent in {phase} at T = "
+            f"{time:.4g}: pass max_steps={suggestion} or more"
+        )
+
+
+def _power_of_two_above(steps: float) -> int:
+    """Budgets are powers of two, so that few of them are ever compiled."""
+    return 2 ** math.ceil(math.log2(steps))
 
 
 def oblique_impact(
@@ -38,9 +109,9 @@ def oblique_impact(
     tangential_speed,
     *,
     friction=0.0,
-    rtol: float = 1e-8,
+    rtol: float | None = None,
     history: bool = False,
-    max_steps: int = 1024,
+    max_steps: int | None = None,
 ) -> ObliqueImpact:
     """Oblique impact (report 3.3) in the report's dimensionless variables.
 
@@ -52,10 +123,15 @@ def oblique_impact(
       L / t0; the normal one positive, the tangential one non-negative (zero is the
       normal impact of 3.2).
     - `friction`: Coulomb coefficient between vehicle and barrier, non-negative.
-    - `rtol`: relative tolerance of the step loop (absolute: 1e-3 rtol).
+    - `rtol`: relative tolerance of the step loop (absolute: 1e-3 rtol). `None`: 1e-8, or
+      in float32 the smallest it can meet, 1.2e-5; a smaller one raises a `ValueError`.
     - `history`: also return the recorded steps and the displacement field.
     - `max_steps`: step budget of the whole run: every attempted step, and one for the
-      start of each phase and segment (also the size of the recorded history).
+      start of each phase and segment (also the size of the recorded history). `None`:
+      1024, and where that is spent (heavy vehicles, mu above about 50), four times as
+      many, again and again up to 65536 (each a new compilation). A spent budget raises a
+      one-line `RuntimeError` that says what to pass; inside a caller's `jit`, `vmap` or
+      `grad` the budget cannot grow and a spent one is a run-time error.
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap`.
@@ -69,12 +145,18 @@ def oblique_impact(
     vh = _checks.non_negative("tangential_speed", tangential_speed)
     friction = _checks.non_negative("friction", friction)
     args = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
-    options = {"max_steps": int(max_steps), "history": bool(history), "n_x": _N_X}
-    rtol = jnp.asarray(rtol, args[0].dtype)
-    if args[0].ndim == 0:
-        return _oblique_solved(*args, rtol, **options)
-    flat = _oblique_solved(*(a.ravel() for a in args), rtol, **options)
-    return jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), flat)
+    rtol = _tolerance(rtol, args[0].dtype)
+    flat = args[0].ndim > 0
+    inputs = tuple(a.ravel() for a in args) if flat else args
+
+    def solve(budget):
+        options = {"max_steps": budget, "history": bool(history), "n_x": _N_X}
+        return _oblique_solved(*inputs, rtol, **options)
+
+    result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
+    if not flat:
+        return result
+    return jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), result)
 
 
 def _of_lane(carry: Carry, lane) -> Carry:
@@ -110,18 +192,24 @@ def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x)
             refill=_REFILL,
         )
 
-    solve = forward_jacobian_jvp(solve, n_differentiable=5)
-    result, outcome = solve(mu, phi, vn, vh, friction, rtol)
-    return raise_failures(result, outcome)
+    return forward_jacobian_jvp(solve, n_differentiable=5)(mu, phi, vn, vh, friction, rtol)
 
 
 def moving_load(
-    force_ratio, tangential_speed, t_end, *, rtol: float = 1e-8, max_steps: int = 1024
+    force_ratio,
+    tangential_speed,
+    t_end,
+    *,
+    rtol: float | None = None,
+    max_steps: int | None = None,
 ) -> MovingLoad:
     """A constant force moving along the beam at constant speed: the accelerative-phase
     equations (3.3.16) alone, from S1 = S2 = S*, V0 = 0 to T = `t_end`. Its steady state
     is (3.3.18)-(3.3.19): S1 = phi - sqrt(phi^2 - 1), S2 = phi + sqrt(phi^2 - 1),
-    V0 = sqrt(phi^2 - 1) / V_H."""
+    V0 = sqrt(phi^2 - 1) / V_H.
+
+    `rtol` and `max_steps` as in `oblique_impact`; with `max_steps=None` a spent budget
+    grows to what the time reached says the run needs."""
     _check_options(rtol, max_steps)
     phi = _checks.check(
         "force_ratio", force_ratio, lambda x: (x > 1.0) & (x < jnp.inf), "above 1 and finite"
@@ -129,7 +217,19 @@ def moving_load(
     vh = _checks.positive("tangential_speed", tangential_speed)
     t_end = _checks.positive("t_end", t_end)
     args = jnp.broadcast_arrays(phi, vh, t_end)
-    return _moving_load(*args, jnp.asarray(rtol, args[0].dtype), max_steps=int(max_steps))
+    rtol = _tolerance(rtol, args[0].dtype)
+
+    def larger(budget, outcome):
+        """The budget in proportion to the time left, with a quarter to spare."""
+        reached = np.asarray(outcome.time / args[2])[~np.asarray(outcome.complete)]
+        return _power_of_two_above(1.25 * budget / max(float(np.min(reached)), 1e-3))
+
+    return _within_budget(
+        lambda budget: _moving_load(*args, rtol, max_steps=budget),
+        max_steps,
+        larger,
+        moving_load=True,
+    )
 
 
 @functools.partial(jax.jit, static_argnames=("max_steps",))
@@ -154,5 +254,4 @@ def _moving_load(phi, vh, t_end, rtol, *, max_steps):
     solve = forward_jacobian_jvp(solve, n_differentiable=3)
     for _ in range(phi.ndim):
         solve = jax.vmap(solve, in_axes=(0, 0, 0, None))
-    result, outcome = solve(phi, vh, t_end, rtol)
-    return raise_failures(result, outcome, moving_load=True)
+    return solve(phi, vh, t_end, rtol)

@@ -16,6 +16,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Int
 
+from ..._custom_types import Scalar
 from ..._solve.recorded_rk import Carry, RecordedRK, Recording, Solution
 from .mechanism import Params, State, beam_acceleration, start_series
 from .memory import Past, read_past
@@ -261,32 +262,42 @@ def initial_carry(loop: RecordedRK, mu, phi, vn, vh, friction, *, history, t_end
 
 
 class Outcome(eqx.Module):
-    """How a solve ended, for `raise_failures`."""
+    """How a solve ended, for `raise_failures` and `failure_message`: whether it completed,
+    the phase it was in, whether the load overtook the hinge ahead, and the time reached."""
 
     complete: Bool[Array, ""]
     phase: Int[Array, ""]
     overtaken: Bool[Array, ""]
+    time: Scalar
 
 
 def outcome_of(solution: Solution) -> Outcome:
-    return Outcome(solution.complete, solution.stage.phase, solution.stage.overtaken)
+    return Outcome(
+        solution.complete, solution.stage.phase, solution.stage.overtaken, solution.y.time
+    )
+
+
+OVERTAKEN_MESSAGE = (
+    "the load caught up with the hinge ahead of it (S1 -> 0) in the contact phase: the "
+    "vehicle slides faster than the barrier's plastic zone can run ahead, outside the "
+    "three-hinge mechanism of report 3.3"
+)
+
+
+def phase_name(phase: int, moving_load: bool) -> str:
+    names = {CRUSHING: "the moving load" if moving_load else "the crushing phase"}
+    return (names | {CONTACT: "the contact phase", FREE: "the free phase"})[phase]
 
 
 def raise_failures(value, outcome: Outcome, moving_load=False):
-    """`value`, or an error where any solve failed (`Outcome`)."""
-    phases = {CRUSHING: "moving load" if moving_load else "crushing phase"}
-    phases |= {CONTACT: "contact phase", FREE: "free phase"}
-    for phase, name in phases.items():
+    """`value`, or a run-time error where any solve failed (`Outcome`): the checks for
+    solves traced inside a caller's `jit`, `vmap` or `grad`, whose messages cannot hold the
+    values (`failure_message` says more where the outcome is concrete)."""
+    for phase in (CRUSHING, CONTACT, FREE):
         value = eqx.error_if(
             value,
             ~outcome.complete & (outcome.phase == phase),
-            f"{name}: the step budget (max_steps) was spent before the phase ended: raise "
-            "max_steps",
+            f"{phase_name(phase, moving_load)}: the step budget was spent before the phase "
+            "ended: pass a larger max_steps (twice the last, say)",
         )
-    return eqx.error_if(
-        value,
-        outcome.overtaken,
-        "the load caught up with the hinge ahead of it (S1 -> 0) in the contact phase: the "
-        "vehicle slides faster than the barrier's plastic zone can run ahead, outside the "
-        "three-hinge mechanism of report 3.3",
-    )
+    return eqx.error_if(value, outcome.overtaken, OVERTAKEN_MESSAGE)
