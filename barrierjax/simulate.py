@@ -16,6 +16,7 @@ from jax.core import Tracer
 from jaxtyping import Array, Float
 
 from ._custom_types import Batchable
+from .hinge.axial import axial_impact
 from .hinge.normal import NormalImpact, normal_impact
 from .hinge.oblique import ObliqueImpact, ObliqueImpactHistory, oblique_impact
 from .scene import Dimensionless, Scene, dimensionless
@@ -219,16 +220,11 @@ def simulate(
 
 def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
     s = groups.scales
-    axial = groups.axial_ratio is not None
-    model = normal_impact(
-        groups.mass_ratio,
-        groups.force_ratio,
-        groups.normal_speed,
-        method="ode" if axial else method,
-        rtol=rtol,
-        n_history=n_history,
-        axial_ratio=groups.axial_ratio,
-    )
+    inputs = (groups.mass_ratio, groups.force_ratio, groups.normal_speed)
+    if groups.axial_ratio is None:
+        model = normal_impact(*inputs, method=method, rtol=rtol, n_history=n_history)
+    else:
+        model = axial_impact(*inputs, groups.axial_ratio, rtol=rtol, n_history=n_history)
     vehicle = scene.vehicle
     history = None
     if n_history:

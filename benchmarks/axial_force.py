@@ -1,4 +1,4 @@
-"""Benchmark of the beam stage with axial force, `normal_impact(..., axial_ratio=eta0)`
+"""Benchmark of the beam stage with axial force, `axial_impact(..., axial_ratio=eta0)`
 (report section 3.4).
 
 Run from the repository root:
@@ -46,7 +46,7 @@ import jax.numpy as jnp
 import numpy as np
 from _common import argument_parser, meta, save, source_fingerprint, sources_changed
 
-from barrierjax.hinge import normal_impact
+from barrierjax.hinge import axial_impact, normal_impact
 
 EXAMPLE = {"mass_ratio": 0.5, "force_ratio": 2.0, "speed": 1.0}
 EXAMPLE_ETAS = (2.0, 2.5, 5.0)
@@ -132,11 +132,10 @@ def report_scheme(mu, phi, speed, eta0, dT):
 
 
 def section_example(cfg):
-    ours = normal_impact(
+    ours = axial_impact(
         jnp.full(4, EXAMPLE["mass_ratio"]),
         jnp.full(4, EXAMPLE["force_ratio"]),
         jnp.full(4, EXAMPLE["speed"]),
-        method="ode",
         rtol=1e-10,
         axial_ratio=jnp.asarray((0.0,) + EXAMPLE_ETAS),
     )
@@ -207,16 +206,16 @@ def fields(r):
 
 
 def section_error_vs_time(cfg, inputs):
-    reference = fields(normal_impact(*inputs[:3], method="ode", rtol=1e-12, axial_ratio=inputs[3]))
+    reference = fields(axial_impact(*inputs[:3], rtol=1e-12, axial_ratio=inputs[3]))
     rows = []
     print(f"\n(b) error against run time, {len(inputs[0])} scenarios (reference: rtol 1e-12)")
     print(f"    {'rtol':>8s} {'error':>9s} {'us/scen':>9s} {'compile s':>9s}")
     for rtol in cfg["rtols"]:
         call = lambda rtol=rtol: (
-            normal_impact(*inputs[:3], method="ode", rtol=rtol, axial_ratio=inputs[3]).w_final
+            axial_impact(*inputs[:3], rtol=rtol, axial_ratio=inputs[3]).w_final
         )
         seconds, first = best_of(call)
-        result = normal_impact(*inputs[:3], method="ode", rtol=rtol, axial_ratio=inputs[3])
+        result = axial_impact(*inputs[:3], rtol=rtol, axial_ratio=inputs[3])
         error = float(np.max(np.abs(fields(result) / reference - 1.0)))
         per = seconds / len(inputs[0])
         rows.append(
@@ -242,9 +241,7 @@ def section_throughput(cfg, seed):
     for batch in cfg["batches"]:
         mu, phi, speed, eta0 = scenarios(batch, seed + batch)
         axial, _ = best_of(
-            functools.partial(
-                normal_impact, mu, phi, speed, method="ode", rtol=1e-6, axial_ratio=eta0
-            )
+            functools.partial(axial_impact, mu, phi, speed, rtol=1e-6, axial_ratio=eta0)
         )
         plain, _ = best_of(
             functools.partial(normal_impact, mu, phi, speed, method="ode", rtol=1e-6)
@@ -268,7 +265,7 @@ def section_gradient(cfg, seed):
     inputs = scenarios(cfg["grad_batch"], seed + 7)
 
     def total(*x):
-        r = normal_impact(*x[:3], method="ode", rtol=1e-8, axial_ratio=x[3])
+        r = axial_impact(*x[:3], rtol=1e-8, axial_ratio=x[3])
         return jnp.sum(r.w_final + r.damage + r.t_final)
 
     forward, _ = best_of(lambda: total(*inputs))
@@ -302,8 +299,8 @@ def section_string(cfg, seed):
     mu, phi, speed, eta0 = (jnp.asarray(x) for x in zip(*STRING_CASES))
 
     def solve(cells, courant, n_history=0):
-        return normal_impact(
-            mu, phi, speed, method="ode", rtol=1e-11, axial_ratio=eta0,
+        return axial_impact(
+            mu, phi, speed, rtol=1e-11, axial_ratio=eta0,
             string_cells=cells, string_courant=courant, n_history=n_history,
         )
 
@@ -353,7 +350,7 @@ def section_string(cfg, seed):
     print(f"    {'batch':>7s} {'string':>9s} {'reached':>8s} {'3.2 ODE':>9s} {'ratio':>6s}")
     for batch in cfg["string_batches"]:
         inputs = scenarios(batch, seed + batch, (2.0, 6.0))
-        call = functools.partial(normal_impact, *inputs[:3], method="ode", rtol=1e-6, axial_ratio=inputs[3])
+        call = functools.partial(axial_impact, *inputs[:3], rtol=1e-6, axial_ratio=inputs[3])
         axial, _ = best_of(call)
         reached = float(np.mean(np.isfinite(np.asarray(call().t_string))))
         plain, _ = best_of(functools.partial(normal_impact, *inputs[:3], method="ode", rtol=1e-6))
@@ -364,7 +361,7 @@ def section_string(cfg, seed):
     inputs = scenarios(cfg["string_batches"][0], seed + 11, (2.0, 6.0))
 
     def total(*x):
-        r = normal_impact(*x[:3], method="ode", rtol=1e-8, axial_ratio=x[3])
+        r = axial_impact(*x[:3], rtol=1e-8, axial_ratio=x[3])
         return jnp.sum(r.w_final + r.damage + r.t_final)
 
     forward, _ = best_of(lambda: total(*inputs))

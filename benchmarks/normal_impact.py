@@ -45,8 +45,8 @@ import jax.numpy as jnp
 import numpy as np
 from _common import argument_parser, drain, meta, save, source_fingerprint, sources_changed
 
-from barrierjax.hinge import normal as _normal
 from barrierjax.hinge.normal import normal_impact
+from barrierjax.hinge.normal.ode import ode_phases
 
 try:
     import mpmath as mp
@@ -470,7 +470,7 @@ def ode_step_counts(n, seed, rtol, solver_name="Tsit5"):
     mu, phi, _ = batch_inputs(n, seed)
 
     def solve(m, p):
-        *_, first, second = _normal._ode_phases(m, p, rtol=rtol, solver=SOLVERS[solver_name]())
+        *_, first, second = ode_phases(m, p, rtol=rtol, solver=SOLVERS[solver_name]())
         return first.num_steps, second.num_steps
 
     first, second = jax.block_until_ready(jax.jit(jax.vmap(solve))(mu, phi))

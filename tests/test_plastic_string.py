@@ -1,4 +1,4 @@
-"""The plastic-string stage of report 3.4 (3.4.45)-(3.4.48): `normal_impact(...,
+"""The plastic-string stage of report 3.4 (3.4.45)-(3.4.48): `axial_impact(...,
 axial_ratio=eta0)` past N = N0, and its solver `plastic_string_stage`."""
 
 import jax
@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from barrierjax.hinge import normal_impact
+from barrierjax.hinge import axial_impact
 from barrierjax.hinge.string import StringStart, plastic_string_stage
 
 # (mass ratio, force ratio, speed, eta0): the string begins after the vehicle stopped
@@ -16,7 +16,7 @@ STRING_CASES = [(0.5, 2.0, 1.0, 10.0), (5.0, 1.5, 1.0, 5.0), (0.5, 2.0, 1.0, 2.5
 
 def _string(mu, phi, v, eta0, **kwargs):
     # The options of tests/test_axial_force.py, whose compilations this file then shares.
-    return normal_impact(mu, phi, v, method="ode", rtol=1e-10, axial_ratio=eta0, **kwargs)
+    return axial_impact(mu, phi, v, rtol=1e-10, axial_ratio=eta0, **kwargs)
 
 
 def _energy_error(r, mu, v):
@@ -144,4 +144,4 @@ def test_history_through_the_string_stage():
 )
 def test_bad_string_options_name_the_field(kwargs, field):
     with pytest.raises(ValueError, match=field):
-        normal_impact(0.5, 2.0, 1.0, method="ode", axial_ratio=10.0, **kwargs)
+        axial_impact(0.5, 2.0, 1.0, axial_ratio=10.0, **kwargs)

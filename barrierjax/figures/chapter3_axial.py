@@ -1,6 +1,6 @@
 """Figures of report section 3.4, axial force: the static collapse of a beam held against
 axial motion (3.4.2-3.4.5, `barrierjax.hinge.static_collapse`) and the dynamic beam stage
-of the example in 3.4 (ii) (3.4.9, `barrierjax.hinge.normal_impact` with `axial_ratio`).
+of the example in 3.4 (ii) (3.4.9, `barrierjax.hinge.axial_impact`).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..hinge.normal import normal_impact
+from ..hinge.axial import axial_impact
 from ..hinge.static_collapse import static_load_deflection
 from .registry import figure, title
 
@@ -163,11 +163,10 @@ AXIAL_RATIOS_3_4_9 = (0.0, 2.0, 2.5, 5.0, 10.0)  # 10: the string stage is reach
 def _figure_3_4_9() -> Figure:
     etas = jnp.asarray(AXIAL_RATIOS_3_4_9)
     ones = jnp.ones_like(etas)
-    result = normal_impact(
+    result = axial_impact(
         EXAMPLE_3_4_9["mass_ratio"] * ones,
         EXAMPLE_3_4_9["force_ratio"] * ones,
         EXAMPLE_3_4_9["speed"] * ones,
-        method="ode",
         rtol=1e-10,
         axial_ratio=etas,
         n_history=150,

@@ -1,5 +1,6 @@
 """Rigid-plastic hinge mechanisms of a vehicle striking a beam on a backing (report ch. 3)."""
 
+from .axial import axial_impact
 from .elastic import (
     ElasticImpact,
     StringImpact,
@@ -16,6 +17,7 @@ from .oblique import MovingLoad, ObliqueImpact, ObliqueImpactHistory, moving_loa
 from .static_collapse import StaticLoadDeflection, static_load_deflection
 
 __all__ = [
+    "axial_impact",
     "ElasticImpact",
     "MovingLoad",
     "NormalImpact",

@@ -45,7 +45,7 @@ V0 = V* rtol e^-3 (the vehicle rides with the beam to the end, as (3.4.38) assum
 "Not modelled" below); the rest is added with S frozen. At rest S is the positive root of
 the cubic (3.4.40), S^3 + 3 mu S^2 - 3 (1 + n_f^2) S - 3 mu (1 + n_f^2) = 0, n_f = 2 lambda_f.
 
-All of it runs in the speed-free variables of `normal.py` (tau = T/V, v = V0/V, w = W0/V^2
+All of it runs in the speed-free variables of `barrierjax.hinge.normal` (tau = T/V, v = V0/V, w = W0/V^2
 for the impact speed V): n = 2 eta w with eta = eta0 V^2, so the speed enters through eta.
 
 Not modelled: a second crushing. As n grows, the contact force -mu V0' of the
@@ -67,10 +67,10 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._custom_types import Scalar
-from .._solve.phases import sigma_end as _sigma_end
-from .._solve.phases import solve_phase
-from .string import StringStage, StringStart, plastic_string_stage
+from ..._custom_types import Scalar
+from ..._solve.phases import sigma_end as _sigma_end
+from ..._solve.phases import solve_phase
+from ..string import StringStage, StringStart, plastic_string_stage
 
 
 class _Params(eqx.Module):
@@ -372,7 +372,7 @@ def _after_string(first, second, string_in_first, string: StringStage, start: St
     }
 
 
-def axial_impact(
+def axial_stages(
     mu,
     phi,
     eta,
@@ -387,7 +387,7 @@ def axial_impact(
     """Both stages, speed-free (see the module docstring); `eta` = eta0 V^2. Returns the
     end-of-crushing state, the state at rest, the works, `t_string` (inf where n stays
     below 1), `string_work` and the string's flow-rule check and, with `n_history`,
-    `history`: samples per phase and the state at rest, in the fields of `normal.py`'s
+    `history`: samples per phase and the state at rest, in the fields of `normal`'s
     histories plus `axial_force`."""
     solver = diffrax.Tsit5() if solver is None else solver
     root = jnp.sqrt(phi**2 + 3.0)
@@ -417,7 +417,9 @@ def axial_impact(
     crush = first.y_end.crush + jnp.where(locked, 0.5 * p.mu * vehicle**2 / p.phi, 0.0)
     t_string = jnp.where(string_in_first, first.t_end, second.y_end.time)
     return dict(
-        history=_history(first, second, string_in_first, p, final, string, reached, n_history) if n_history else None,
+        history=_history(first, second, string_in_first, p, final, string, reached, n_history)
+        if n_history
+        else None,
         s_star=p.s_star,
         t_star=first.t_end,
         v_star=v_star,
@@ -431,7 +433,9 @@ def axial_impact(
     )
 
 
-def _history(first, second, string_in_first, p: _Params, final, string: StringStage, reached, n_history):
+def _history(
+    first, second, string_in_first, p: _Params, final, string: StringStage, reached, n_history
+):
     """Phase 1 uniform in time (n_history samples), phase 2 uniform in sigma after its
     start up to where it stopped (n_history - 1), the string stage uniform in time
     (n_history), then the state at rest. A stage that does not occur repeats the state it

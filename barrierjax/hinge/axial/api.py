@@ -1,0 +1,111 @@
+"""`axial_impact`, the public function of report 3.4's dynamic model: the beam stage
+(`stages`) and the plastic string (`barrierjax.hinge.string`), scaled by the impact speed
+into the `NormalImpact` of report 3.2."""
+
+import functools
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ... import _checks
+from ..._solve.sensitivity import forward_jacobian_jvp
+from ..normal.api import checked_inputs, normal_impact
+from ..normal.results import NormalImpact, rigid_barrier, scaled_history
+from .stages import axial_stages
+
+
+@functools.partial(jax.jit, static_argnames=("n_history", "string_cells", "string_courant"))
+def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string_courant):
+    """The beam stage by time integration, then the plastic string where N reaches N0; in the speed-free variables
+    the speed enters through eta0 V^2. `rtol` is traced: a new tolerance does not
+    recompile."""
+    yields = phi > 1.0
+    safe_phi = jnp.where(yields, phi, 2.0)
+
+    def stages(mu, phi, eta, rtol):
+        return axial_stages(
+            mu,
+            phi,
+            eta,
+            rtol=rtol,
+            n_history=n_history,
+            string_cells=string_cells,
+            string_courant=string_courant,
+        )
+
+    r = forward_jacobian_jvp(stages, n_differentiable=3)(mu, safe_phi, eta0 * speed**2, rtol)
+    history = scaled_history(r["history"], mu, speed) if n_history else None
+    t_final = eqx.error_if(
+        r["t_final"] * speed,
+        ~r["string_finished"] & yields,
+        "the plastic string stage did not come to rest within its step budget",
+    )
+    result = NormalImpact(
+        s_star=r["s_star"],
+        t_star=r["t_star"] * speed,
+        v_star=r["v_star"] * speed,
+        w_star=r["w_star"] * speed**2,
+        damage=r["damage"] * speed**2,
+        s_final=r["s_final"],
+        t_final=t_final,
+        w_final=r["w_final"] * speed**2,
+        crush_work=safe_phi * r["damage"] * speed**2,
+        backing_work=r["backing_work"] * speed**2,
+        hinge_work=(r["bending_work"] + r["stretching_work"]) * speed**2,
+        t_string=r["t_string"] * speed,
+        string_work=r["string_work"] * speed**2,
+        history=history,
+    )
+    rigid = rigid_barrier(mu, phi, speed, n_history, string_cells=string_cells)
+    return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+
+
+def axial_impact(
+    mass_ratio,
+    force_ratio,
+    speed,
+    axial_ratio,
+    *,
+    rtol: float = 1e-8,
+    n_history: int = 0,
+    string_cells: int = 128,
+    string_courant: float = 1.0,
+) -> NormalImpact:
+    """Normal impact on a beam held against axial motion (report 3.4), in the report's
+    dimensionless variables: the beam stage of (3.4.34)-(3.4.39) by time integration,
+    and where N reaches N0 the plastic string (3.4.45) to rest (`string.py`).
+
+    **Arguments:**
+
+    - `mass_ratio`, `force_ratio`, `speed`, `rtol`, `n_history`: as in `normal_impact`.
+    - `axial_ratio`: eta0 = N0 / (4 (M0 q0)^1/2), the beam's yield force in tension in
+      the report's units, non-negative. A Python `0` is the model of 3.2 itself
+      (`normal_impact`, compiled without any axial term).
+    - `string_cells`: elements over the string's half-span.
+    - `string_courant`: the string's time step over its element's wave transit time, in
+      (0, 1] (1: exact for the free string).
+
+    Returns a `NormalImpact`: `t_string` is where N reaches N0 (inf if it never does),
+    `string_work` the string's plastic work, and the history has `axial_force` and the
+    string's profile. Scalars, or arrays of one shape (vmapped); `rtol` is traced, so a
+    new tolerance does not recompile.
+    """
+    if isinstance(axial_ratio, int | float) and axial_ratio == 0:
+        return normal_impact(mass_ratio, force_ratio, speed, rtol=rtol, n_history=n_history)
+    mu, phi, speed = checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history)
+    eta0 = _checks.non_negative("axial_ratio", axial_ratio)
+    if int(string_cells) != string_cells or string_cells < 2:
+        raise ValueError(f"string_cells must be an integer >= 2; got {string_cells!r}")
+    if not 0.0 < string_courant <= 1.0:
+        raise ValueError(f"string_courant must be in (0, 1]; got {string_courant!r}")
+    args = jnp.broadcast_arrays(mu, phi, speed, eta0)
+    solve = functools.partial(
+        _axial_impact,
+        n_history=int(n_history),
+        string_cells=int(string_cells),
+        string_courant=float(string_courant),
+    )
+    for _ in range(args[0].ndim):
+        solve = jax.vmap(solve, in_axes=(0, 0, 0, 0, None))
+    return solve(*args, jnp.asarray(rtol, args[0].dtype))
