@@ -1,11 +1,12 @@
 """barrierjax: differentiable impact-dynamics models for highway barriers, in JAX.
 
-Describe a `Scene` (a `Barrier`, a `Vehicle`, an `Impact`) in any consistent units and
-call `simulate(scene)`; the report's models live in `barrierjax.hinge` (chapter 3) and
-`barrierjax.materials` (chapter 2), the sizing problem in `barrierjax.design`.
+Describe a `Scene` (a `Barrier`, a `Vehicle`, an `Impact`) in any consistent units, or
+read one with `load_scene("scene.toml")`, and call `simulate(scene)` for its `Result`.
+The report's models live in `barrierjax.materials` (chapter 2), `barrierjax.hinge`
+(chapter 3) and `barrierjax.beam` (chapter 4); the sizing problem in `barrierjax.design`.
 """
 
-from . import hinge, materials
+from . import beam, hinge, materials
 from .scene import (
     Barrier,
     Dimensionless,
@@ -16,7 +17,10 @@ from .scene import (
     broadcast_scene,
     dimensionless,
 )
+from .scene_file import load_scene
 from .simulate import History, Result, simulate
+
+from . import design  # noqa: E402  (after simulate, which it builds on)
 
 __all__ = [
     "Barrier",
@@ -27,9 +31,12 @@ __all__ = [
     "Scales",
     "Scene",
     "Vehicle",
+    "beam",
     "broadcast_scene",
+    "design",
     "dimensionless",
     "hinge",
+    "load_scene",
     "materials",
     "simulate",
 ]

@@ -76,3 +76,11 @@ def test_scene_is_a_pytree_for_vmap():
     groups = jax.vmap(bj.dimensionless)(bj.broadcast_scene(batch))
     for i, v in enumerate(speeds):
         assert float(groups.normal_speed[i]) == pytest.approx(float(bj.dimensionless(scene(speed=float(v))).normal_speed))
+
+
+def test_top_level_names_a_newcomer_reaches_for():
+    for name in ("Scene", "Barrier", "Vehicle", "Impact", "simulate", "load_scene", "Result"):
+        assert name in bj.__all__ and callable(getattr(bj, name)), name
+    for package in ("hinge", "materials", "beam", "design"):
+        assert getattr(bj, package).__name__ == f"barrierjax.{package}"
+    assert bj.load_scene(bj.scene_file.default_scene_path()) == bj.scene_file.default_scene()
