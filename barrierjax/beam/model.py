@@ -206,26 +206,22 @@ def init_sections(model):
     return grow(stress), jax.tree.map(grow, state)
 
 
-def internal_forces(model, u_new, u_old, stress, state, dt, *, scheme="implicit", iterations=0):
-    """Assembled internal forces (n_dofs,) at u_new, the sections stepped from u_old.
-
-    Returns (f, (stress, state, N, M, strains)) with per-element leaves."""
-    if scheme not in SCHEMES:
-        raise ValueError(f"scheme must be one of {SCHEMES}; got {scheme!r}")
+def _elements(model, dt, scheme, iterations):
+    """Each element's dofs and end coordinates, and its response (forces, stepped
+    sections) as a function of them, its displacements at both times and its sections."""
     idx = model.element_dofs()
     conn = np.asarray(model.connectivity).reshape(-1, 2)
-    X1, X2 = model.coords[conn[:, 0]], model.coords[conn[:, 1]]
     xi, w = length_points(model.quadrature)
 
-    def one(X1, X2, qn, qo, s, st):
+    def response(X1, X2, q_new, q_old, stress, state):
         return element_response(
             model.section,
             X1,
             X2,
-            qn,
-            qo,
-            s,
-            st,
+            q_new,
+            q_old,
+            stress,
+            state,
             dt,
             xi,
             w,
@@ -234,7 +230,17 @@ def internal_forces(model, u_new, u_old, stress, state, dt, *, scheme="implicit"
             shallow=model.shallow,
         )
 
-    f_el, out = jax.vmap(one)(X1, X2, u_new[idx], u_old[idx], stress, state)
+    return idx, model.coords[conn[:, 0]], model.coords[conn[:, 1]], response
+
+
+def internal_forces(model, u_new, u_old, stress, state, dt, *, scheme="implicit", iterations=0):
+    """Assembled internal forces (n_dofs,) at u_new, the sections stepped from u_old.
+
+    Returns (f, (stress, state, N, M, strains)) with per-element leaves."""
+    if scheme not in SCHEMES:
+        raise ValueError(f"scheme must be one of {SCHEMES}; got {scheme!r}")
+    idx, X1, X2, response = _elements(model, dt, scheme, iterations)
+    f_el, out = jax.vmap(response)(X1, X2, u_new[idx], u_old[idx], stress, state)
     f = jnp.zeros(model.n_dofs, u_new.dtype).at[idx].add(f_el)
     return f, out
 
@@ -243,30 +249,10 @@ def tangent_stiffness(model, u_new, u_old, stress, state, dt, *, scheme="implici
     """Assembled tangent stiffness [K1] + [K2] (4.2.36)-(4.2.37) at u_new: the forward-mode
     derivative of the element forces (consistent material tangent, co-rotational geometric
     stiffness). Returns (K, f, out)."""
-    idx = model.element_dofs()
-    conn = np.asarray(model.connectivity).reshape(-1, 2)
-    X1, X2 = model.coords[conn[:, 0]], model.coords[conn[:, 1]]
-    xi, w = length_points(model.quadrature)
+    idx, X1, X2, response = _elements(model, dt, scheme, iterations)
 
     def one(X1, X2, qn, qo, s, st):
-        def force(q):
-            return element_response(
-                model.section,
-                X1,
-                X2,
-                q,
-                qo,
-                s,
-                st,
-                dt,
-                xi,
-                w,
-                scheme=scheme,
-                iterations=iterations,
-                shallow=model.shallow,
-            )
-
-        (f, out), k = _value_and_jacfwd(force, qn)
+        (f, out), k = _value_and_jacfwd(lambda q: response(X1, X2, q, qo, s, st), qn)
         return f, k, out
 
     f_el, k_el, out = jax.vmap(one)(X1, X2, u_new[idx], u_old[idx], stress, state)
