@@ -12,6 +12,7 @@ integration as their average over each step (exact impulse for any step; see
 `barrierjax.beam.integrate`).
 """
 
+import functools
 from typing import Any
 
 import equinox as eqx
@@ -211,25 +212,17 @@ def _elements(model, dt, scheme, iterations):
     sections) as a function of them, its displacements at both times and its sections."""
     idx = model.element_dofs()
     conn = np.asarray(model.connectivity).reshape(-1, 2)
-    xi, w = length_points(model.quadrature)
-
-    def response(X1, X2, q_new, q_old, stress, state):
-        return element_response(
-            model.section,
-            X1,
-            X2,
-            q_new,
-            q_old,
-            stress,
-            state,
-            dt,
-            xi,
-            w,
-            scheme=scheme,
-            iterations=iterations,
-            shallow=model.shallow,
-        )
-
+    xi, weights = length_points(model.quadrature)
+    response = functools.partial(
+        element_response,
+        model.section,
+        dt=dt,
+        xi=xi,
+        weights=weights,
+        scheme=scheme,
+        iterations=iterations,
+        shallow=model.shallow,
+    )
     return idx, model.coords[conn[:, 0]], model.coords[conn[:, 1]], response
 
 
