@@ -5,28 +5,12 @@ deflection limit, by gradients (augmented Lagrangian with optax), checked by bru
 (`summary()`, `as_dict()`); `SizingProblem` states a problem, `SteelTube` the section.
 """
 
+from .grid import GridResult, grid_search
+from .model import barrier, constraint, objective, responses, rigid_wall_crush, to_design, to_unit
+from .optimizer import Solution, default_starts, polish, solve
+from .problem import ImpactCases, SizingProblem, default_cases
+from .report import DesignReport, optimize, optimize_default
 from .section import SteelTube, area, plastic_modulus
-from .sizing import (
-    DesignReport,
-    GridResult,
-    ImpactCases,
-    SizingProblem,
-    Solution,
-    barrier,
-    constraint,
-    default_cases,
-    default_starts,
-    grid_search,
-    objective,
-    optimize,
-    optimize_default,
-    polish,
-    responses,
-    rigid_wall_crush,
-    solve,
-    to_design,
-    to_unit,
-)
 
 __all__ = [
     "DesignReport",
