@@ -62,8 +62,8 @@ def power(x):
 
 def viscoplastic_laws(tau):
     return {
-        "2.2.10": perzyna.LinearOverstress(E, NU, SY, tau),
-        "2.2.11": perzyna.QuadraticOverstress(E, NU, SY, tau),
+        "2.2.10": perzyna.PerzynaLinearOverstress(E, NU, SY, tau),
+        "2.2.11": perzyna.PerzynaQuadraticOverstress(E, NU, SY, tau),
         "2.2.12": perzyna.RelativeOverstress(E, NU, SY, tau),
         "2.2.13": perzyna.Craggs(E, NU, SY, tau),
         "2.2.9": perzyna.Perzyna(E, NU, SY, tau, power),
@@ -326,7 +326,7 @@ def test_uniaxial_reductions():
         over = E * rate * tau_eff * (1 - np.exp(-(t - t_yield) / tau_eff))
         return np.where(t < t_yield, E * rate * t, SY + over)
 
-    law = perzyna.LinearOverstress(E, NU, SY, tau)
+    law = perzyna.PerzynaLinearOverstress(E, NU, SY, tau)
     errors = []
     for n in (120, 240):
         dt = duration / n
@@ -375,7 +375,7 @@ def tangent_errors(law, stress, state, increment, dt):
 
 
 def test_viscoplastic_vmap_equals_loop():
-    law = perzyna.QuadraticOverstress(E, NU, SY, 1e-3)
+    law = perzyna.PerzynaQuadraticOverstress(E, NU, SY, 1e-3)
     taus = jnp.array([1e-5, 1e-3, 1e-1])
     increments = strain_path(20)
     batched = jax.vmap(
@@ -423,6 +423,6 @@ def test_bad_viscoplastic_inputs(field, kwargs, rule):
     arguments = {"young": E, "poisson": NU, "yield_stress": SY, "relaxation_time": 1e-3} | kwargs
     with pytest.raises(ValueError, match=rf"Craggs\.{field} must be {rule}"):
         perzyna.Craggs(**arguments)
-    law = perzyna.LinearOverstress(E, NU, SY, 1e-3)
+    law = perzyna.PerzynaLinearOverstress(E, NU, SY, 1e-3)
     with pytest.raises(ValueError, match="dt must be positive"):
         perzyna.update(law, jnp.zeros((3, 3)), perzyna.initial_state(), jnp.zeros((3, 3)), 0.0)

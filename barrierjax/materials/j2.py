@@ -32,6 +32,7 @@ from jaxtyping import Array, Float
 
 from .. import _checks
 from .._custom_types import Batchable, Scalar
+from .elastic import IsotropicElastic
 
 Tensor = Float[Array, "3 3"]
 Tangent = Float[Array, "3 3 3 3"]
@@ -41,7 +42,7 @@ def _poisson(name: str, value):
     return _checks.check(name, value, lambda x: (x > -1.0) & (x < 0.5), "in (-1, 0.5)")
 
 
-class J2Plasticity(eqx.Module):
+class J2Plasticity(IsotropicElastic):
     """Isotropic elasticity (E, nu) with the Mises yield condition and linear hardening.
 
     Perfectly plastic with both moduli zero (the default), isotropic (2.1.16), kinematic
@@ -64,16 +65,6 @@ class J2Plasticity(eqx.Module):
         self.kinematic_modulus = _checks.non_negative(
             "J2Plasticity.kinematic_modulus", kinematic_modulus
         )
-
-    @property
-    def shear_modulus(self):
-        """G = E / (2 (1 + nu))."""
-        return self.young / (2.0 * (1.0 + self.poisson))
-
-    @property
-    def bulk_modulus(self):
-        """K = E / (3 (1 - 2 nu))."""
-        return self.young / (3.0 * (1.0 - 2.0 * self.poisson))
 
 
 class J2State(eqx.Module):

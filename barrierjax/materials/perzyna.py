@@ -8,11 +8,11 @@ overstress. Every printed form is
 
 with the volume change elastic (3K eps_kk' = sigma_kk'):
 
-    (2.2.10) LinearOverstress    (sqrt(J2) - k)/sqrt(J2)      Phi = 1 - (1 + x)^(-1/2)
-    (2.2.11) QuadraticOverstress (J2 - k^2)/k^2               Phi = x
-    (2.2.12) RelativeOverstress  (J2 - k^2)/J2                Phi = x/(1 + x)
-    (2.2.13) Craggs              (J2 - k^2)^(1/2)/J2^(1/2)     Phi = (x/(1 + x))^(1/2)
-    (2.2.9)  Perzyna             any non-decreasing Phi with Phi(0) = 0
+    (2.2.10) PerzynaLinearOverstress    (sqrt(J2) - k)/sqrt(J2)      Phi = 1 - (1 + x)^(-1/2)
+    (2.2.11) PerzynaQuadraticOverstress (J2 - k^2)/k^2               Phi = x
+    (2.2.12) RelativeOverstress         (J2 - k^2)/J2                Phi = x/(1 + x)
+    (2.2.13) Craggs                     (J2 - k^2)^(1/2)/J2^(1/2)     Phi = (x/(1 + x))^(1/2)
+    (2.2.9)  Perzyna                    any non-decreasing Phi with Phi(0) = 0
 
 Departures from the printed text:
 - (2.2.9) is (*) with f = J2 (n = 2, df/dsigma_ij = s_ij). As printed it lacks the 1/(2G)
@@ -49,14 +49,13 @@ import numpy as np
 
 from .. import _checks
 from .._custom_types import Batchable, Scalar
+from .elastic import IsotropicElastic
 from .j2 import Tangent, Tensor, _identity_tensors, _poisson, _symmetric, deviator, safe_norm
 
 
-class AbstractViscoplastic(eqx.Module):
+class AbstractViscoplastic(IsotropicElastic):
     """Elastic constants, static yield stress and time constant shared by all the forms."""
 
-    young: eqx.AbstractVar[Batchable]
-    poisson: eqx.AbstractVar[Batchable]
     yield_stress: eqx.AbstractVar[Batchable]
     relaxation_time: eqx.AbstractVar[Batchable]
 
@@ -67,14 +66,6 @@ class AbstractViscoplastic(eqx.Module):
     def effective_stress(self, trial, k, ratio):
         """Root q of q (1 + r Phi) = q_trial, for q_trial > k (safeguarded Newton)."""
         return _implicit_root(self.overstress_function, trial, k, ratio)
-
-    @property
-    def shear_modulus(self):
-        return self.young / (2.0 * (1.0 + self.poisson))
-
-    @property
-    def bulk_modulus(self):
-        return self.young / (3.0 * (1.0 - 2.0 * self.poisson))
 
 
 def _checked_fields(cls_name, young, poisson, yield_stress, relaxation_time):
@@ -98,7 +89,7 @@ class _Printed(AbstractViscoplastic):
         )
 
 
-class LinearOverstress(_Printed):
+class PerzynaLinearOverstress(_Printed):
     """(2.2.10): 2G e' = s' + (1/tau) (J2^(1/2) - k)/J2^(1/2) s; linear in the overstress."""
 
     def overstress_function(self, x):
@@ -109,7 +100,7 @@ class LinearOverstress(_Printed):
         return k + (trial - k) / (1.0 + ratio)
 
 
-class QuadraticOverstress(_Printed):
+class PerzynaQuadraticOverstress(_Printed):
     """(2.2.11): 2G e' = s' + (1/tau) (J2 - k^2)/k^2 s (a cubic in q: Newton)."""
 
     def overstress_function(self, x):
