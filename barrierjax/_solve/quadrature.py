@@ -21,7 +21,7 @@ import numpy as np
 
 
 @functools.cache
-def _gauss_legendre_unit(n: int) -> tuple[np.ndarray, np.ndarray]:
+def gauss_legendre_unit(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Legendre nodes and weights on [0, 1] (weights sum to 1)."""
     x, w = np.polynomial.legendre.leggauss(n)
     return (x + 1.0) / 2.0, w / 2.0
@@ -29,7 +29,7 @@ def _gauss_legendre_unit(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def gauss_legendre(n: int, a, b):
     """Nodes and weights of the n-point Gauss-Legendre rule on [a, b] (a, b may be arrays)."""
-    x, w = _gauss_legendre_unit(n)
+    x, w = gauss_legendre_unit(n)
     a = jnp.asarray(a)[..., None]
     b = jnp.asarray(b)[..., None]
     return a + (b - a) * x, (b - a) * w
@@ -38,7 +38,7 @@ def gauss_legendre(n: int, a, b):
 @functools.cache
 def _legendre_projection(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Nodes r_i on [0, 1] and the matrix Q[i, k] = w_i (2k + 1) P_k(2 r_i - 1)."""
-    r, w = _gauss_legendre_unit(n)
+    r, w = gauss_legendre_unit(n)
     legendre = np.polynomial.legendre.legvander(2.0 * r - 1.0, n - 1)
     return r, w[:, None] * (2.0 * np.arange(n) + 1.0)[None, :] * legendre
 

@@ -47,7 +47,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from .. import _checks
-from .._solve.quadrature import _gauss_legendre_unit
+from .._solve.quadrature import gauss_legendre_unit
 
 _GAUSS_NODES = 8  # exact for (sigma/sigma0)^beta, integer beta <= 15, on a linear segment
 _NEWTON_STEPS = 48
@@ -142,7 +142,7 @@ def delay_time(times, stresses, *, sigma0, A, d, beta):
 @jax.jit
 def _delay_time(times, stresses, sigma0, A, d, beta):
     dtype = jnp.result_type(times, stresses, sigma0, A, d, beta)
-    nodes, weights = (jnp.asarray(x, dtype) for x in _gauss_legendre_unit(_GAUSS_NODES))
+    nodes, weights = (jnp.asarray(x, dtype) for x in gauss_legendre_unit(_GAUSS_NODES))
 
     t0, h = times[:-1], jnp.diff(times)
     s0, ds = stresses[:-1], jnp.diff(stresses)

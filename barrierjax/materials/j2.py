@@ -38,7 +38,8 @@ Tensor = Float[Array, "3 3"]
 Tangent = Float[Array, "3 3 3 3"]
 
 
-def _poisson(name: str, value):
+def checked_poisson(name: str, value):
+    """Poisson's ratio, checked to lie in (-1, 0.5) (a stable isotropic solid)."""
     return _checks.check(name, value, lambda x: (x > -1.0) & (x < 0.5), "in (-1, 0.5)")
 
 
@@ -57,7 +58,7 @@ class J2Plasticity(IsotropicElastic):
 
     def __init__(self, young, poisson, yield_stress, isotropic_modulus=0.0, kinematic_modulus=0.0):
         self.young = _checks.positive("J2Plasticity.young", young)
-        self.poisson = _poisson("J2Plasticity.poisson", poisson)
+        self.poisson = checked_poisson("J2Plasticity.poisson", poisson)
         self.yield_stress = _checks.positive("J2Plasticity.yield_stress", yield_stress)
         self.isotropic_modulus = _checks.non_negative(
             "J2Plasticity.isotropic_modulus", isotropic_modulus
@@ -92,7 +93,8 @@ def safe_norm(tensor: Tensor) -> Scalar:
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
 
 
-def _symmetric(tensor: Tensor) -> Tensor:
+def symmetric_part(tensor: Tensor) -> Tensor:
+    """(A + A^T) / 2: the strain of a displacement gradient."""
     return 0.5 * (tensor + tensor.T)
 
 
@@ -118,7 +120,7 @@ def _return_map(law: J2Plasticity, stress, state, strain_increment):
     """Trial stress, then the closed-form radial return (linear hardening makes the
     consistency condition linear in the multiplier increment)."""
     g = law.shear_modulus
-    trial = stress + _elastic(law, _symmetric(strain_increment))
+    trial = stress + _elastic(law, symmetric_part(strain_increment))
     relative = deviator(trial) - state.back_stress
     size = safe_norm(relative)
     overshoot = size - _radius(law, state.equivalent_plastic_strain)
@@ -144,7 +146,8 @@ def update(
     return new_stress, new_state
 
 
-def _identity_tensors(dtype):
+def identity_tensors(dtype):
+    """The fourth-order symmetric identity I_ijkl and the volumetric delta_ij delta_kl."""
     eye = jnp.eye(3, dtype=dtype)
     symmetric = 0.5 * (jnp.einsum("ik,jl->ijkl", eye, eye) + jnp.einsum("il,jk->ijkl", eye, eye))
     volumetric = jnp.einsum("ij,kl->ijkl", eye, eye)
@@ -164,7 +167,7 @@ def consistent_tangent(
     """
     g = law.shear_modulus
     _, normal, size, multiplier, plastic = _return_map(law, stress, state, strain_increment)
-    symmetric, volumetric = _identity_tensors(stress.dtype)
+    symmetric, volumetric = identity_tensors(stress.dtype)
     theta = 1.0 - 2.0 * g * multiplier / jnp.where(plastic, size, 1.0)
     hardening = 1.0 / (1.0 + (law.isotropic_modulus + law.kinematic_modulus) / (3.0 * g))
     theta_bar = jnp.where(plastic, hardening - (1.0 - theta), 0.0)

@@ -50,7 +50,15 @@ import numpy as np
 from .. import _checks
 from .._custom_types import Batchable, Scalar
 from .elastic import IsotropicElastic
-from .j2 import Tangent, Tensor, _identity_tensors, _poisson, _symmetric, deviator, safe_norm
+from .j2 import (
+    Tangent,
+    Tensor,
+    checked_poisson,
+    deviator,
+    identity_tensors,
+    safe_norm,
+    symmetric_part,
+)
 
 
 class AbstractViscoplastic(IsotropicElastic):
@@ -71,7 +79,7 @@ class AbstractViscoplastic(IsotropicElastic):
 def _checked_fields(cls_name, young, poisson, yield_stress, relaxation_time):
     return (
         _checks.positive(f"{cls_name}.young", young),
-        _poisson(f"{cls_name}.poisson", poisson),
+        checked_poisson(f"{cls_name}.poisson", poisson),
         _checks.positive(f"{cls_name}.yield_stress", yield_stress),
         _checks.positive(f"{cls_name}.relaxation_time", relaxation_time),
     )
@@ -195,7 +203,7 @@ def _return_map(law: AbstractViscoplastic, stress, strain_increment, dt):
     """Trial deviator, its effective stress, the root q and dq/dq_trial."""
     dt = _checks.positive("dt", dt)
     g, bulk = law.shear_modulus, law.bulk_modulus
-    increment = _symmetric(strain_increment)
+    increment = symmetric_part(strain_increment)
     eye = jnp.eye(3, dtype=stress.dtype)
     pressure = jnp.trace(stress) / 3.0 + bulk * jnp.trace(increment)
     trial = deviator(stress) + 2.0 * g * deviator(increment)
@@ -244,7 +252,7 @@ def consistent_tangent(
     del state
     g = law.shear_modulus
     _, trial, q_trial, scale, slope = _return_map(law, stress, strain_increment, dt)
-    symmetric, volumetric = _identity_tensors(stress.dtype)
+    symmetric, volumetric = identity_tensors(stress.dtype)
     normal = trial / jnp.where(q_trial > 0.0, np.sqrt(2.0) * q_trial, 1.0)
     return (
         law.bulk_modulus * volumetric
