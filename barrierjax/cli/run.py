@@ -7,12 +7,21 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ..hinge.oblique import ObliqueImpact
 from .cantilever import cantilever_number, run_cantilever
 from .output import EXIT_FAILED, CommandError, as_float, print_result, progress, progress_after
 
 __all__ = ["STANDARD_GRAVITY", "format_summary", "result_dict", "run_command"]
 
 STANDARD_GRAVITY = 9.80665  # m/s^2, to express decelerations in g
+
+
+def _model_name(result) -> str:
+    if isinstance(result.model, ObliqueImpact):
+        return "oblique impact with convective terms (report 3.3)"
+    if result.groups.axial_ratio is not None:
+        return "normal impact on a beam held against axial motion (report 3.4)"
+    return "normal impact, rigid-plastic vehicle, beam and backing (report 3.2)"
 
 
 def result_dict(scene, result, name: str = "") -> dict:
@@ -23,13 +32,7 @@ def result_dict(scene, result, name: str = "") -> dict:
     deceleration = as_float(result.peak_deceleration)
     return {
         "scene": name,
-        "model": (
-            "oblique impact with convective terms (report 3.3)"
-            if result.model.__class__.__name__ != "NormalImpact"
-            else "normal impact, rigid-plastic vehicle, beam and backing (report 3.2)"
-            if groups.axial_ratio is None
-            else "normal impact on a beam held against axial motion (report 3.4)"
-        ),
+        "model": _model_name(result),
         "inputs": {
             "plastic_moment_N_m": as_float(barrier.plastic_moment),
             "mass_per_length_kg_m": as_float(barrier.mass_per_length),
