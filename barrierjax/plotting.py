@@ -29,6 +29,7 @@ __all__ = [
     "hermite",
     "histories_figure",
     "is_oblique",
+    "label_axes",
     "nearest_samples",
     "oblique_deflected_shape_figure",
     "oblique_histories_figure",
@@ -91,18 +92,29 @@ def dense_times(t, count: int = 800) -> np.ndarray:
     return np.union1d(t, np.linspace(t[0], t[-1], count))
 
 
-def _label_line(ax, x, text, **style):
-    """A small grey label just right of the vertical line at data coordinate x."""
+def _label_line(ax, x, text, height=0.5, offset=4, **style):
+    """A small grey label `offset` points right of the vertical line at data coordinate x,
+    at `height` (a fraction of the axes' height)."""
     ax.annotate(
         text,
-        xy=(x, 0.5),
+        xy=(x, height),
         xycoords=("data", "axes fraction"),
-        xytext=(4, 0),
+        xytext=(offset, 0),
         textcoords="offset points",
         fontsize=8,
         color="0.4",
         **style,
     )
+
+
+def label_axes(ax, xlabel, ylabel, which="major", **legend):
+    """Label `ax`'s axes, draw the light grid of every figure here (at the `which` ticks:
+    "both" on log axes) and its legend, with the options `legend` (loc, fontsize, ...).
+    Public: the report's figures (`barrierjax.figures`) are finished the same way."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, which=which, alpha=0.3)
+    ax.legend(**legend)
 
 
 def histories_figure(result, title: str | None = None) -> Figure:
@@ -170,6 +182,14 @@ def shape_times(result, count: int = 6) -> np.ndarray:
     return nearest_samples(t, np.linspace(start, t[-1], count))
 
 
+def _label_deflection(ax, xlabel, legend_loc):
+    """Finish the axes of a deflected shape: the deflection (mm) against `xlabel`, drawn
+    downwards (the barrier is pushed away from the traffic), with the legend at
+    `legend_loc`."""
+    ax.invert_yaxis()
+    label_axes(ax, xlabel, "deflection (mm)", loc=legend_loc, fontsize=9)
+
+
 def deflected_shape_figure(result, count: int = 6, title: str | None = None) -> Figure:
     """The barrier's deflected shape (mm) along its axis (m) at `count` instants; the
     shape is symmetric about the impact point, so x is mirrored to show both sides. The
@@ -195,11 +215,7 @@ def deflected_shape_figure(result, count: int = 6, title: str | None = None) -> 
     for side in (-extent, extent):
         ax.axvline(side, color="0.5", linestyle=":", linewidth=1)
     _label_line(ax, extent, "final hinge")
-    ax.invert_yaxis()  # the barrier is pushed away from the traffic, drawn downwards
-    ax.set_xlabel("distance along the barrier from the impact point (m)")
-    ax.set_ylabel("deflection (mm)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower right", fontsize=9)
+    _label_deflection(ax, "distance along the barrier from the impact point (m)", "lower right")
     if title:
         fig.suptitle(title)
     return fig
@@ -234,17 +250,7 @@ def _mark_phases(axes, t_star, t_sep):
     for time, style, text in marks:
         for ax in axes:
             ax.axvline(time * _MS, color="0.6", linestyle=style, linewidth=1)
-        axes[0].annotate(
-            text,
-            xy=(time * _MS, 0.97),
-            xycoords=("data", "axes fraction"),
-            xytext=(3, 0),
-            textcoords="offset points",
-            rotation=90,
-            va="top",
-            fontsize=8,
-            color="0.4",
-        )
+        _label_line(axes[0], time * _MS, text, height=0.97, offset=3, rotation=90, va="top")
 
 
 def oblique_histories_figure(result, title: str | None = None) -> Figure:
@@ -319,17 +325,7 @@ def oblique_deflected_shape_figure(result, count: int = 6, title: str | None = N
             ax.plot(h["vehicle_position"][k], h["displacement"][k] * _MM, "o", color=color)
     ax.plot([], [], "o", color="0.4", label="contact point")
     ax.axvline(0.0, color="0.3", linewidth=0.8)
-    ax.annotate(
-        "impact point",
-        xy=(0.0, 0.03),
-        xycoords=("data", "axes fraction"),
-        xytext=(4, 0),
-        textcoords="offset points",
-        rotation=90,
-        va="bottom",
-        fontsize=8,
-        color="0.4",
-    )
+    _label_line(ax, 0.0, "impact point", height=0.03, rotation=90, va="bottom")
     ax.annotate(
         "vehicle travels this way \u2192",
         xy=(0.98, 0.04),
@@ -339,11 +335,7 @@ def oblique_deflected_shape_figure(result, count: int = 6, title: str | None = N
         color="0.4",
     )
     ax.set_ylim(bottom=0.0)
-    ax.invert_yaxis()  # the barrier is pushed away from the traffic, drawn downwards
-    ax.set_xlabel("position along the barrier from the impact point (m)")
-    ax.set_ylabel("deflection (mm)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower left", fontsize=9)
+    _label_deflection(ax, "position along the barrier from the impact point (m)", "lower left")
     if title:
         fig.suptitle(title)
     return fig
@@ -436,10 +428,14 @@ def path_figure(result, count: int = 6, title: str | None = None) -> Figure:
         loc="left",
         fontsize=9,
     )
-    ax.set_xlabel("position along the barrier from the impact point (m)")
-    ax.set_ylabel("lateral position, towards the barrier (mm)\n(scale exaggerated)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    label_axes(
+        ax,
+        "position along the barrier from the impact point (m)",
+        "lateral position, towards the barrier (mm)\n(scale exaggerated)",
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        fontsize=8,
+    )
     if title:
         fig.suptitle(title)
     return fig

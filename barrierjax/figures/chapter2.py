@@ -25,6 +25,7 @@ from ..materials.overstress import (
 )
 from ..materials.plasticity import RateIndependentPlasticity
 from ..materials.response import uniaxial_response
+from ..plotting import label_axes
 from .registry import figure, title
 
 STEEL_E = 30e6  # psi
@@ -97,6 +98,13 @@ def _figure_2_2() -> Figure:
     return fig
 
 
+def delay_constants_2_3(grains):
+    """The delay-time constants of (2.3.2) given in 2.3, for `grains` grains per mm^2:
+    (A in mm^3 s, the grain diameter d in mm, beta). Public: the delayed yield of 3.5
+    (`chapter3_elastic`) uses them too."""
+    return DELAY_2_3["A"], grain_diameter(grains), DELAY_2_3["beta"]
+
+
 def _lower_yield(sigma_c, tau, rates):
     """The logarithmic law's flow stress at 2 % strain at each constant rate (2.2.8)."""
     law = LogOverstress(STEEL_E, STEEL_YIELD, sigma_c, tau)
@@ -110,14 +118,8 @@ def _figure_2_3() -> Figure:
     ax = fig.subplots()
     sigma0 = 2.0 * STEEL_G / 45.0
     for k, grains in enumerate(DELAY_2_3["grains"]):
-        upper = upper_yield_stress(
-            rates,
-            E=STEEL_E,
-            sigma0=sigma0,
-            A=DELAY_2_3["A"],
-            d=grain_diameter(grains),
-            beta=DELAY_2_3["beta"],
-        )
+        A, d, beta = delay_constants_2_3(grains)
+        upper = upper_yield_stress(rates, E=STEEL_E, sigma0=sigma0, A=A, d=d, beta=beta)
         ax.loglog(
             rates,
             np.asarray(upper) / 1e3,
@@ -144,10 +146,7 @@ def _figure_2_3() -> Figure:
             ms=3,
             label=f"lower, log law: $\\sigma_c$ = {sigma_c:,.0f} psi, $\\tau$ = {tau:g} s ({note})",
         )
-    ax.set_xlabel("strain rate $\\alpha$, 1/s")
-    ax.set_ylabel("yield stress, ksi")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    label_axes(ax, "strain rate $\\alpha$, 1/s", "yield stress, ksi", which="both", fontsize=8)
     title(
         fig,
         "2.3",

@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 
 from ..hinge.axial import axial_impact
 from ..hinge.static_collapse import static_load_deflection
+from ..plotting import label_axes
 from .registry import figure, title
 
 # --------------------------------------------------------------------------------------
@@ -65,11 +66,8 @@ def _figure_3_4_2() -> Figure:
     )
     ax.axhline(0.0, color="0.6", lw=0.7)
     ax.axvline(0.0, color="0.6", lw=0.7)
-    ax.set_xlabel("$N/N_0$")
-    ax.set_ylabel("$M/M_0$")
     ax.set_aspect("equal")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="center", fontsize=8)
+    label_axes(ax, "$N/N_0$", "$M/M_0$", loc="center", fontsize=8)
     title(fig, "3.4.2", "A: incipient collapse, B: on the way, C: the plastic string (3.4.8)")
     return fig
 
@@ -116,11 +114,8 @@ def _figure_3_4_4() -> Figure:
         if np.isinf(a):
             n, m = np.array([0.0, 1.0, 1.0]), np.array([1.0, 1.0, 0.0])
         ax.plot(n, m, color=f"C{i}", label=_exponent_label(a))
-    ax.set_xlabel("$N/N_0$")
-    ax.set_ylabel("$M/M_0$")
     ax.set_aspect("equal")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, title=r"$|M/M_0| + (N/N_0)^\alpha = 1$")
+    label_axes(ax, "$N/N_0$", "$M/M_0$", fontsize=8, title=r"$|M/M_0| + (N/N_0)^\alpha = 1$")
     title(fig, "3.4.4", "(3.4.17): 1 the ideal I section, 2 the rectangle")
     return fig
 

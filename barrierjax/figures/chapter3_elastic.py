@@ -18,8 +18,8 @@ from ..hinge.elastic import (
     elastic_limit_speed,
     string_impact,
 )
-from ..materials.delayed_yield import grain_diameter
-from .chapter2 import DELAY_2_3, STEEL_E, STEEL_G, STEEL_YIELD
+from ..plotting import label_axes
+from .chapter2 import DELAY_2_3, STEEL_E, STEEL_G, STEEL_YIELD, delay_constants_2_3
 from .registry import figure, title
 
 # A rectangular steel bar 1 in wide and 4 in deep, in lb, in, s.
@@ -79,26 +79,24 @@ def _figure_3_5() -> Figure:
     # (`barrierjax.materials.delayed_yield`), 10 times lower.
     implied = {2030.0: 39_280.0, 346.0: 39_980.0}
     for k, grains in enumerate(DELAY_2_3["grains"]):
+        delay_constant, d, beta = delay_constants_2_3(grains)
         for sigma0, style, note in (
             (2.0 * STEEL_G / 45.0, ":", "2G/45"),
             (implied[grains], "-", ""),
         ):
             delayed = delayed_yield_limit_speed(
-                masses,
-                **section,
-                y=y,
-                sigma0=sigma0,
-                delay_constant=DELAY_2_3["A"],
-                d=grain_diameter(grains),
-                beta=DELAY_2_3["beta"],
+                masses, **section, y=y, sigma0=sigma0, delay_constant=delay_constant, d=d, beta=beta
             )
             label = f"{grains:g} grains/mm$^2$, $\\sigma_0$ = {sigma0 / 1e3:.1f} ksi {note}"
             ax.loglog(masses, np.asarray(delayed / elastic), color=f"C{k}", ls=style, label=label)
     ax.axhline(1.0, color="0.5", ls="--", lw=0.9)
-    ax.set_xlabel("striking mass M, lb s$^2$/in")
-    ax.set_ylabel("limiting speed with delayed yield / without (30 ksi)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=9)
+    label_axes(
+        ax,
+        "striking mass M, lb s$^2$/in",
+        "limiting speed with delayed yield / without (30 ksi)",
+        which="both",
+        fontsize=9,
+    )
     title(
         fig,
         "3.5",

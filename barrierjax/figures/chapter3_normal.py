@@ -154,10 +154,14 @@ def _figure_3_2_4() -> Figure:
         label=r"$\mu \to \infty$: $S^*/(2(\phi - S^*))$",
     )
     ax.set_xlim(1e-2, 1e3)
-    ax.set_xlabel(r"mass ratio $\mu = M/(mL)$")
-    ax.set_ylabel("vehicle damage $D/V_0^2$")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", fontsize=9)
+    plotting.label_axes(
+        ax,
+        r"mass ratio $\mu = M/(mL)$",
+        "vehicle damage $D/V_0^2$",
+        which="both",
+        loc="upper left",
+        fontsize=9,
+    )
     ax.annotate(
         r"$D/V_0^2 = T^*/(2V_0) = \mu S^* / (2[\phi S^* + \mu(\phi - S^*)])$,  "
         r"$S^* = (\phi^2 + 3)^{1/2} - \phi$",

@@ -320,10 +320,13 @@ def _figure_3_3_6() -> Figure:
         fontsize=9,
     )
     ax.set_aspect("equal")
-    ax.set_xlabel("position along the barrier $X$ (from the impact point)")
-    ax.set_ylabel("displacement $W$ (towards the barrier)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper right", fontsize=8)
+    plotting.label_axes(
+        ax,
+        "position along the barrier $X$ (from the impact point)",
+        "displacement $W$ (towards the barrier)",
+        loc="upper right",
+        fontsize=8,
+    )
     title(
         fig,
         "3.3.6",

@@ -35,6 +35,7 @@ from ..beam.section import (
     static_moment,
     yield_surface,
 )
+from ..plotting import label_axes
 from .registry import figure, title
 
 EXAMPLE_1 = {"E": 30e6, "sigma0": 29_000.0, "depth": 0.177, "width": 0.644, "D": 40.0, "q": 5.0}
@@ -52,10 +53,14 @@ def _figure_4_1_2() -> Figure:
     for k, rate in enumerate(KAPPA_RATES_4_1):
         left.plot(kappa, moment_curvature_bar(kappa, rate), color=f"C{k}", label=f"{rate:g}")
         left.axhline(float(moment_limit(rate)), color=f"C{k}", ls=":", lw=0.8)
-    left.set_xlabel("curvature  E kappa h / sigma0")
-    left.set_ylabel("M / M0")
     left.set_title("linear law (4.1.2); dotted: the limits (4.1.13)", fontsize=9)
-    left.legend(fontsize=8, title="E kappa' tau* h / sigma0")
+    label_axes(
+        left,
+        "curvature  E kappa h / sigma0",
+        "M / M0",
+        fontsize=8,
+        title="E kappa' tau* h / sigma0",
+    )
 
     example = EXAMPLE_1
     yield_curvature = 2 * example["sigma0"] / (example["E"] * example["depth"])
@@ -69,12 +74,8 @@ def _figure_4_1_2() -> Figure:
             color=f"C{k}",
             label=f"{rate:g}",
         )
-    right.set_xlabel("curvature, 1/in")
-    right.set_ylabel("M, lb in")
     right.set_title("Example-1 section, law (4.3.1): D = 40/s, q = 5", fontsize=9)
-    right.legend(fontsize=8, title="kappa', 1/(in s)")
-    for ax in (left, right):
-        ax.grid(True, alpha=0.3)
+    label_axes(right, "curvature, 1/in", "M, lb in", fontsize=8, title="kappa', 1/(in s)")
     title(fig, "4.1.2", "constant curvature rate from rest (4.1.9)-(4.1.12)")
     return fig
 
@@ -91,10 +92,7 @@ def _figure_4_1_3() -> Figure:
     ax.plot(kappa, moment_elastic_plastic(kappa, rate), label="elastic, (4.1.15)")
     ax.plot(kappa, moment_exponential(kappa, rate), label="exponential, (4.1.16)")
     ax.plot(kappa, moment_exponential(kappa, rate, 0.65), label="(4.1.17), alpha = 0.65")
-    ax.set_xlabel("curvature  E kappa h / sigma0")
-    ax.set_ylabel("M / M0")
-    ax.legend(fontsize=8)
-    ax.grid(True, alpha=0.3)
+    label_axes(ax, "curvature  E kappa h / sigma0", "M / M0", fontsize=8)
     title(fig, "4.1.3", "E kappa' tau* h / sigma0 = 1 (alpha = 0.65 minimises the largest error)")
     return fig
 
@@ -116,12 +114,9 @@ def _figure_4_1_7() -> Figure:
                 ls=":",
                 lw=0.8,
             )
-    ax.set_xlabel("N / N0")
-    ax.set_ylabel("M / M0")
     ax.set_xlim(0, None)
     ax.set_ylim(0, None)
-    ax.legend(fontsize=8)
-    ax.grid(True, alpha=0.3)
+    label_axes(ax, "N / N0", "M / M0", fontsize=8)
     title(
         fig,
         "4.1.7",
