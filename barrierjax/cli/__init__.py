@@ -62,6 +62,24 @@ __all__ = [
 ]
 
 
+def _add_command(commands, name, handler, *, json_help=None, out=None, **texts):
+    """Add the command `name`, run as `handler(args)`, to the subparsers `commands`, with
+    `texts` (help, description, epilog) for its help, and the options that commands share:
+    with `json_help` (its help), the flag --json; with `out` = (default folder, what the
+    command writes there), --out DIR. Returns the command's parser."""
+    parser = commands.add_parser(name, **texts)
+    if json_help is not None:
+        parser.add_argument("--json", action="store_true", help=json_help)
+    if out is not None:
+        folder, contents = out
+        parser.add_argument(
+            "--out", type=Path, default=Path(folder), metavar="DIR",
+            help=f"folder for the {contents} (default: ./{folder})",
+        )
+    parser.set_defaults(handler=handler)
+    return parser
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the `barrierjax` command."""
     from importlib.metadata import PackageNotFoundError, version
@@ -79,8 +97,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"barrierjax {release}")
     commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
 
-    run = commands.add_parser(
-        "run",
+    run = _add_command(
+        commands, "run", run_command,
+        json_help="print one JSON object with the results in SI units (keys damage_m, "
+        "max_deflection_m, duration_s, peak_deceleration_g, ...) and nothing else on stdout",
+        out=("barrierjax-out", "plots"),
         help="simulate a scene file (or the default scene)",
         description="Simulate the impact of a vehicle on a barrier described by a TOML "
         "scene file, print a summary with units (or one JSON object in SI units), and "
@@ -97,15 +118,6 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "scene", nargs="?", type=Path, metavar="SCENE.toml",
         help="scene file (default: the built-in default scene)",
-    )
-    run.add_argument(
-        "--json", action="store_true",
-        help="print one JSON object with the results in SI units (keys damage_m, "
-        "max_deflection_m, duration_s, peak_deceleration_g, ...) and nothing else on stdout",
-    )
-    run.add_argument(
-        "--out", type=Path, default=Path("barrierjax-out"), metavar="DIR",
-        help="folder for the plots (default: ./barrierjax-out)",
     )
     run.add_argument("--no-plots", action="store_true", help="do not write plots")
     beam = run.add_argument_group(
@@ -128,34 +140,26 @@ def build_parser() -> argparse.ArgumentParser:
     beam.add_argument("--dt", type=float, metavar="S", help="step after the pulse (s)")
     beam.add_argument("--t-end", type=float, metavar="S", help="end of the run (s)")
     beam.add_argument("--elements", type=int, metavar="N", help="number of elements")
-    run.set_defaults(handler=run_command)
 
-    figures = commands.add_parser(
-        "figures",
+    figures = _add_command(
+        commands, "figures", figures_command,
+        out=("barrierjax-figures", "figures"),
         help="write the report's figures as PNG files",
         description="Reproduce the report's figures (sections 3.2 and 3.3 so far) as PNG "
         "files named by figure number (fig_3_2_2.png, ...), printing each path written.",
     )
     figures.add_argument(
-        "--out", type=Path, default=Path("barrierjax-figures"), metavar="DIR",
-        help="folder for the figures (default: ./barrierjax-figures)",
-    )
-    figures.add_argument(
         "--only", nargs="+", metavar="NUMBER",
         help="figure numbers to write, e.g. 3.2.4 (default: all)",
     )
-    figures.set_defaults(handler=figures_command)
 
-    optimize = commands.add_parser(
-        "optimize",
+    _add_command(
+        commands, "optimize", optimize_command,
+        json_help="print the report as one JSON object",
         help="optimize the default barrier design",
         description="Size the default barrier with barrierjax.design.optimize_default "
         "and print its report.",
     )
-    optimize.add_argument(
-        "--json", action="store_true", help="print the report as one JSON object"
-    )
-    optimize.set_defaults(handler=optimize_command)
     return parser
 
 
