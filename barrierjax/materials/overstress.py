@@ -64,13 +64,17 @@ class OverstressLaw(eqx.Module):
     elastic_unloading: bool = eqx.field(static=True)
     iterations: int = eqx.field(static=True)
 
-    def _init_common(self, E, sigma0, elastic_unloading, iterations):
+    def _init_common(self, E, sigma0, elastic_unloading, iterations, **positive_parameters):
+        """Set the fields every law has, then each of the law's own `positive_parameters`
+        (name=value), checked positive and finite, as the field of that name."""
         self.E = positive("E", E)
         self.sigma0 = None if sigma0 is None else _static_yield(sigma0)
         self.elastic_unloading = bool(elastic_unloading)
         if int(iterations) < 1:
             raise ValueError(f"iterations must be a positive integer; got {iterations!r}")
         self.iterations = int(iterations)
+        for name, value in positive_parameters.items():
+            setattr(self, name, positive(name, value))
 
     def flow(self, overstress, static_stress, strain):
         """g >= 0, E times the plastic strain rate, for overstress >= 0 (0 at 0)."""
@@ -214,8 +218,7 @@ class LinearOverstress(OverstressLaw):
     tau: jnp.ndarray
 
     def __init__(self, E, sigma0, tau, *, elastic_unloading=False, iterations=4):
-        self._init_common(E, sigma0, elastic_unloading, iterations)
-        self.tau = positive("tau", tau)
+        self._init_common(E, sigma0, elastic_unloading, iterations, tau=tau)
 
     def flow(self, overstress, static_stress, strain):
         return overstress / self.tau
@@ -240,8 +243,7 @@ class StrainDependentOverstress(OverstressLaw):
     eps0: jnp.ndarray
 
     def __init__(self, E, sigma0, tau, eps0, *, elastic_unloading=False, iterations=4):
-        self._init_common(E, sigma0, elastic_unloading, iterations)
-        self.tau = positive("tau", tau)
+        self._init_common(E, sigma0, elastic_unloading, iterations, tau=tau)
         self.eps0 = check("eps0", eps0, lambda x: (x < 0) & (x > -jnp.inf), "negative and finite")
 
     def flow(self, overstress, static_stress, strain):
@@ -259,9 +261,7 @@ class _CharacteristicStressLaw(OverstressLaw):
     tau: jnp.ndarray
 
     def __init__(self, E, sigma0, sigma_c, tau, *, elastic_unloading=False, iterations=12):
-        self._init_common(E, sigma0, elastic_unloading, iterations)
-        self.sigma_c = positive("sigma_c", sigma_c)
-        self.tau = positive("tau", tau)
+        self._init_common(E, sigma0, elastic_unloading, iterations, sigma_c=sigma_c, tau=tau)
 
 
 class LogOverstress(_CharacteristicStressLaw):
@@ -304,9 +304,7 @@ class CowperSymonds(OverstressLaw):
     q: jnp.ndarray
 
     def __init__(self, E, sigma0, D, q, *, elastic_unloading=False, iterations=12):
-        self._init_common(E, sigma0, elastic_unloading, iterations)
-        self.D = positive("D", D)
-        self.q = positive("q", q)
+        self._init_common(E, sigma0, elastic_unloading, iterations, D=D, q=q)
 
     def flow(self, overstress, static_stress, strain):
         ratio = _positive_part(overstress) / static_stress
@@ -324,8 +322,7 @@ class QuadraticOverstress(OverstressLaw):
     tau: jnp.ndarray
 
     def __init__(self, E, sigma0, tau, *, elastic_unloading=False, iterations=12):
-        self._init_common(E, sigma0, elastic_unloading, iterations)
-        self.tau = positive("tau", tau)
+        self._init_common(E, sigma0, elastic_unloading, iterations, tau=tau)
 
     def flow(self, overstress, static_stress, strain):
         return (
@@ -346,9 +343,7 @@ class GilmanJohnston(OverstressLaw):
     D: jnp.ndarray
 
     def __init__(self, E, rate0, D, *, elastic_unloading=False, iterations=12):
-        self._init_common(E, None, elastic_unloading, iterations)
-        self.rate0 = positive("rate0", rate0)
-        self.D = positive("D", D)
+        self._init_common(E, None, elastic_unloading, iterations, rate0=rate0, D=D)
 
     def static_stress(self, kappa):
         return jnp.zeros_like(kappa)
