@@ -37,6 +37,11 @@ def positive(name: str, value):
     return check(name, value, lambda x: (x > 0) & (x < jnp.inf), "positive and finite")
 
 
+def positives(**named):
+    """`positive` for each name=value, in order: a tuple of the checked values."""
+    return tuple(positive(name, value) for name, value in named.items())
+
+
 def non_negative(name: str, value):
     """Finite and non-negative."""
     return check(name, value, lambda x: (x >= 0) & (x < jnp.inf), "non-negative and finite")

@@ -112,12 +112,7 @@ def _displacement_bracket(x):
 
 
 def _section(E, I, A, rho):
-    return (
-        _checks.positive("E", E),
-        _checks.positive("I", I),
-        _checks.positive("A", A),
-        _checks.positive("rho", rho),
-    )
+    return _checks.positives(E=E, I=I, A=A, rho=rho)
 
 
 def impact_rate(mass, *, E, I, A, rho):

@@ -54,12 +54,7 @@ _NEWTON_STEPS = 48
 
 
 def _delay_parameters(sigma0, A, d, beta):
-    return (
-        _checks.positive("sigma0", sigma0),
-        _checks.positive("A", A),
-        _checks.positive("d", d),
-        _checks.positive("beta", beta),
-    )
+    return _checks.positives(sigma0=sigma0, A=A, d=d, beta=beta)
 
 
 def grain_diameter(grains_per_area):
