@@ -218,14 +218,73 @@ def simulate(
     return _oblique(scene, dimensionless(scene), rtol, n_history)
 
 
+# The scale of each field of `History` and `Result` (a field of `Scales`); the adapters
+# below give each model's quantities under these names, dimensionless, and `_in_units`
+# scales them, once.
+_HISTORY_UNITS = {
+    "time": "time",
+    "vehicle_velocity": "velocity",
+    "barrier_velocity": "velocity",
+    "contact_force": "force",
+    "hinge_position": "length",
+    "displacement": "length",
+    "x": "length",
+    "deflected_shape": "length",
+    "rear_hinge_position": "length",
+    "vehicle_position": "length",
+    "vehicle_displacement": "length",
+    "vehicle_tangential_velocity": "velocity",
+}
+_RESULT_UNITS = {
+    "damage": "length",
+    "max_deflection": "length",
+    "duration": "time",
+    "hinge_extent": "length",
+    "crush_work": "energy",
+    "backing_work": "energy",
+    "hinge_work": "energy",
+    "friction_work": "energy",
+    "slope_work": "energy",
+    "string_work": "energy",
+    "exit_speed": "velocity",
+}
+
+
+def _in_units(units, scales, quantities):
+    return {name: value * getattr(scales, units[name]) for name, value in quantities.items()}
+
+
+# What every model's result calls by the `Result`'s own names.
+_SHARED = ("damage", "crush_work", "backing_work", "hinge_work")
+
+
+def _result(scene, groups, model, history, **quantities) -> Result:
+    """The `Result` of a model: its fields named as `Result`'s (`_SHARED`), the other
+    dimensionless `quantities` (the fields of `_RESULT_UNITS`, and `exit_angle_deg`) and
+    `history` (those of `_HISTORY_UNITS`, or None)."""
+    vehicle, scales = scene.vehicle, groups.scales
+    quantities |= {name: getattr(model, name) for name in _SHARED}
+    exit_angle_deg = quantities.pop("exit_angle_deg")
+    if history is not None:
+        history = History(**_in_units(_HISTORY_UNITS, scales, history))
+    return Result(
+        **_in_units(_RESULT_UNITS, scales, quantities),
+        exit_angle_deg=exit_angle_deg,
+        peak_force=vehicle.crush_force,
+        peak_deceleration=vehicle.crush_force / vehicle.mass,
+        kinetic_energy=0.5 * vehicle.mass * scene.impact.speed**2,
+        groups=groups,
+        model=model,
+        history=history,
+    )
+
+
 def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
-    s = groups.scales
     inputs = (groups.mass_ratio, groups.force_ratio, groups.normal_speed)
     if groups.axial_ratio is None:
         model = normal_impact(*inputs, method=method, rtol=rtol, n_history=n_history)
     else:
         model = axial_impact(*inputs, groups.axial_ratio, rtol=rtol, n_history=n_history)
-    vehicle = scene.vehicle
     history = None
     if n_history:
         h = model.history
@@ -235,40 +294,35 @@ def _normal(scene, groups, method, rtol, n_history, n_shape) -> Result:
         shape = deflected_shape(x, h.hinge, h.displacement, h.hinge_work)
         if h.string_profile is not None:
             shape = _with_string_profile(shape, x, h.string_profile, model)
-        history = History(
-            time=h.time * s.time,
-            vehicle_velocity=h.vehicle_velocity * s.velocity,
-            barrier_velocity=h.barrier_velocity * s.velocity,
-            contact_force=h.contact_force * s.force,
-            hinge_position=h.hinge * s.length,
-            displacement=h.displacement * s.length,
-            x=x * s.length,
-            deflected_shape=shape * s.length,
-            rear_hinge_position=h.hinge * s.length,
-            vehicle_position=jnp.zeros_like(h.time),
-            vehicle_displacement=(h.displacement + h.crush) * s.length,
-            vehicle_tangential_velocity=jnp.zeros_like(h.time),
+        zeros = jnp.zeros_like(h.time)
+        history = dict(
+            time=h.time,
+            vehicle_velocity=h.vehicle_velocity,
+            barrier_velocity=h.barrier_velocity,
+            contact_force=h.contact_force,
+            hinge_position=h.hinge,
+            displacement=h.displacement,
+            x=x,
+            deflected_shape=shape,
+            rear_hinge_position=h.hinge,
+            vehicle_position=zeros,
+            vehicle_displacement=h.displacement + h.crush,
+            vehicle_tangential_velocity=zeros,
         )
     zero = jnp.zeros_like(model.damage)
-    return Result(
-        damage=model.damage * s.length,
-        max_deflection=model.w_final * s.length,
-        duration=model.t_final * s.time,
-        peak_force=vehicle.crush_force,
-        peak_deceleration=vehicle.crush_force / vehicle.mass,
-        hinge_extent=model.s_final * s.length,
-        kinetic_energy=0.5 * vehicle.mass * scene.impact.speed**2,
-        crush_work=model.crush_work * s.energy,
-        backing_work=model.backing_work * s.energy,
-        hinge_work=model.hinge_work * s.energy,
+    return _result(
+        scene,
+        groups,
+        model,
+        history,
+        max_deflection=model.w_final,
+        duration=model.t_final,
+        hinge_extent=model.s_final,
         friction_work=zero,
         slope_work=zero,
-        string_work=model.string_work * s.energy,
+        string_work=model.string_work,
         exit_speed=zero,
         exit_angle_deg=zero,
-        groups=groups,
-        model=model,
-        history=history,
     )
 
 
@@ -277,7 +331,6 @@ def _oblique(scene, groups, rtol, n_history) -> Result:
     steps (padded with the final state); `hinge_position` is the distance to the hinge
     ahead of the vehicle, `rear_hinge_position` to the one behind it, and `x` runs along
     the barrier from the impact point."""
-    s = groups.scales
     model = oblique_impact(
         groups.mass_ratio,
         groups.force_ratio,
@@ -288,42 +341,35 @@ def _oblique(scene, groups, rtol, n_history) -> Result:
         history=bool(n_history),
         max_steps=4096,
     )
-    vehicle = scene.vehicle
     history = None
     if n_history:
         h = model.history
         along, normal = vehicle_path(h)
-        history = History(
-            time=h.time * s.time,
-            vehicle_velocity=h.vehicle_normal_velocity * s.velocity,
-            barrier_velocity=h.v0 * s.velocity,
-            contact_force=h.contact_force * s.force,
-            hinge_position=h.s1 * s.length,
-            displacement=h.contact_displacement * s.length,
-            x=h.x * s.length,
-            deflected_shape=h.displacement * s.length,
-            rear_hinge_position=h.s2 * s.length,
-            vehicle_position=along * s.length,
-            vehicle_displacement=normal * s.length,
-            vehicle_tangential_velocity=h.vehicle_tangential_velocity * s.velocity,
+        history = dict(
+            time=h.time,
+            vehicle_velocity=h.vehicle_normal_velocity,
+            barrier_velocity=h.v0,
+            contact_force=h.contact_force,
+            hinge_position=h.s1,
+            displacement=h.contact_displacement,
+            x=h.x,
+            deflected_shape=h.displacement,
+            rear_hinge_position=h.s2,
+            vehicle_position=along,
+            vehicle_displacement=normal,
+            vehicle_tangential_velocity=h.vehicle_tangential_velocity,
         )
-    return Result(
-        damage=model.damage * s.length,
-        max_deflection=model.max_deflection * s.length,
-        duration=model.t_final * s.time,
-        peak_force=vehicle.crush_force,
-        peak_deceleration=vehicle.crush_force / vehicle.mass,
-        hinge_extent=jnp.maximum(model.s1_final, model.s2_final) * s.length,
-        kinetic_energy=0.5 * vehicle.mass * scene.impact.speed**2,
-        crush_work=model.crush_work * s.energy,
-        backing_work=model.backing_work * s.energy,
-        hinge_work=model.hinge_work * s.energy,
-        friction_work=model.friction_work * s.energy,
-        slope_work=model.slope_work * s.energy,
+    return _result(
+        scene,
+        groups,
+        model,
+        history,
+        max_deflection=model.max_deflection,
+        duration=model.t_final,
+        hinge_extent=jnp.maximum(model.s1_final, model.s2_final),
+        friction_work=model.friction_work,
+        slope_work=model.slope_work,
         string_work=jnp.zeros_like(model.damage),
-        exit_speed=jnp.hypot(model.exit_normal_speed, model.exit_tangential_speed) * s.velocity,
+        exit_speed=jnp.hypot(model.exit_normal_speed, model.exit_tangential_speed),
         exit_angle_deg=model.exit_angle_deg,
-        groups=groups,
-        model=model,
-        history=history,
     )
