@@ -54,6 +54,14 @@ def _tolerance(rtol, dtype):
     return jnp.asarray(rtol, dtype)
 
 
+def _force_ratio(force_ratio):
+    """phi, checked: at or below 1 the barrier never yields and 3.3's mechanism has no
+    hinges."""
+    return _checks.check(
+        "force_ratio", force_ratio, lambda x: (x > 1.0) & (x < jnp.inf), "above 1 and finite"
+    )
+
+
 def _check_options(rtol, max_steps):
     if rtol is not None and not 0.0 < rtol < 1.0:
         raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
@@ -138,9 +146,7 @@ def oblique_impact(
     """
     _check_options(rtol, max_steps)
     mu = _checks.positive("mass_ratio", mass_ratio)
-    phi = _checks.check(
-        "force_ratio", force_ratio, lambda x: (x > 1.0) & (x < jnp.inf), "above 1 and finite"
-    )
+    phi = _force_ratio(force_ratio)
     vn = _checks.positive("normal_speed", normal_speed)
     vh = _checks.non_negative("tangential_speed", tangential_speed)
     friction = _checks.non_negative("friction", friction)
@@ -211,9 +217,7 @@ def moving_load(
     `rtol` and `max_steps` as in `oblique_impact`; with `max_steps=None` a spent budget
     grows to what the time reached says the run needs."""
     _check_options(rtol, max_steps)
-    phi = _checks.check(
-        "force_ratio", force_ratio, lambda x: (x > 1.0) & (x < jnp.inf), "above 1 and finite"
-    )
+    phi = _force_ratio(force_ratio)
     vh = _checks.positive("tangential_speed", tangential_speed)
     t_end = _checks.positive("t_end", t_end)
     args = jnp.broadcast_arrays(phi, vh, t_end)
