@@ -285,8 +285,9 @@ OVERTAKEN_MESSAGE = (
 
 
 def phase_name(phase: int, moving_load: bool) -> str:
-    names = {CRUSHING: "the moving load" if moving_load else "the crushing phase"}
-    return (names | {CONTACT: "the contact phase", FREE: "the free phase"})[phase]
+    if phase == CRUSHING:
+        return "the moving load" if moving_load else "the crushing phase"
+    return {CONTACT: "the contact phase", FREE: "the free phase"}[phase]
 
 
 def raise_failures(value, outcome: Outcome, moving_load=False):
