@@ -50,3 +50,11 @@ def non_negative(name: str, value):
 def in_range(name: str, value, low: float, high: float):
     """In the half-open interval (low, high]."""
     return check(name, value, lambda x: (x > low) & (x <= high), f"in ({low:g}, {high:g}]")
+
+
+def history_samples(n_history, *, optional: bool = True) -> int:
+    """A history's sample count: an integer >= 2, or 0 for none where `optional`."""
+    if int(n_history) != n_history or n_history < 2 and not (optional and n_history == 0):
+        rule = "0 or an integer >= 2" if optional else "an integer >= 2"
+        raise ValueError(f"n_history must be {rule}; got {n_history!r}")
+    return int(n_history)

@@ -53,17 +53,11 @@ def is_oblique(result) -> bool:
 
 
 def _history(result):
-    """The history as numpy arrays; an oblique one cut to its recorded steps (the rest of
-    each array repeats the final state)."""
+    """The history as numpy arrays."""
     if result.history is None:
         raise ValueError("the result has no history: call simulate(scene, n_history>=2)")
     h = result.history
-    arrays = {f.name: np.asarray(getattr(h, f.name)) for f in dataclasses.fields(h)}
-    if is_oblique(result) and result.model.history is not None:
-        n = int(result.model.history.n_saved)
-        rows = arrays["time"].shape[0]
-        arrays = {k: a[:n] if a.shape and a.shape[0] == rows else a for k, a in arrays.items()}
-    return arrays
+    return {f.name: np.asarray(getattr(h, f.name)) for f in dataclasses.fields(h)}
 
 
 def hermite(t_new, t, y, dydt):
@@ -144,7 +138,7 @@ def histories_figure(result, title: str | None = None) -> Figure:
     ax.set_ylim(bottom=0.0)
     ax = axes[1, 1]
     fine = dense_times(h["time"])
-    w = hermite(fine, h["time"], h["displacement"], h["barrier_velocity"])
+    w = hermite(fine, h["time"], h["barrier_displacement"], h["barrier_velocity"])
     ax.plot(fine * _MS, w * _MM, color="C4")
     ax.set_ylabel("displacement under vehicle (mm)")
     for ax in axes.flat:
@@ -211,7 +205,7 @@ def deflected_shape_figure(result, count: int = 6, title: str | None = None) -> 
             color=colors[n % 10],
             label=f"t = {h['time'][k] * _MS:.1f} ms",
         )
-    extent = float(result.hinge_extent)
+    extent = float(result.hinge_position)
     for side in (-extent, extent):
         ax.axvline(side, color="0.5", linestyle=":", linewidth=1)
     _label_line(ax, extent, "final hinge")
@@ -284,7 +278,7 @@ def oblique_histories_figure(result, title: str | None = None) -> Figure:
     ax.set_ylim(bottom=0.0)
     ax.legend(loc="lower right", fontsize=8)
     ax = axes[1, 1]
-    ax.plot(t, h["displacement"] * _MM, color="C4", label="barrier under the contact point")
+    ax.plot(t, h["barrier_displacement"] * _MM, color="C4", label="barrier under the contact point")
     ax.plot(
         t,
         h["vehicle_displacement"] * _MM,
@@ -322,7 +316,7 @@ def oblique_deflected_shape_figure(result, count: int = 6, title: str | None = N
             label=f"t = {h['time'][k] * _MS:.1f} ms",
         )
         if k <= leave:
-            ax.plot(h["vehicle_position"][k], h["displacement"][k] * _MM, "o", color=color)
+            ax.plot(h["vehicle_position"][k], h["barrier_displacement"][k] * _MM, "o", color=color)
     ax.plot([], [], "o", color="0.4", label="contact point")
     ax.axvline(0.0, color="0.3", linewidth=0.8)
     _label_line(ax, 0.0, "impact point", height=0.03, rotation=90, va="bottom")
@@ -408,7 +402,7 @@ def path_figure(result, count: int = 6, title: str | None = None) -> Figure:
         h["deflected_shape"][marks] * _MM,
         [f"barrier at t = {t[k] * _MS:.1f} ms" for k in marks],
         (h["vehicle_position"], h["vehicle_displacement"] * _MM),
-        (h["vehicle_position"], h["displacement"] * _MM),
+        (h["vehicle_position"], h["barrier_displacement"] * _MM),
         marks,
         leave,
         (approach[0], approach[1] * _MM),

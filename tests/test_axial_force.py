@@ -13,9 +13,9 @@ FIELDS = (
     "t_star",
     "w_star",
     "damage",
-    "s_final",
-    "t_final",
-    "w_final",
+    "hinge_position",
+    "duration",
+    "barrier_displacement",
     "backing_work",
     "hinge_work",
 )
@@ -35,7 +35,7 @@ def test_zero_axial_ratio_is_the_model_without_axial_force():
         )
     assert np.all(np.isinf(with_zero.t_string)) and np.all(np.isinf(without.t_string))
     plain = axial_impact(mu, phi, v, rtol=1e-12, axial_ratio=0)  # 0: the 3.2 model itself
-    np.testing.assert_array_equal(plain.w_final, without.w_final)
+    np.testing.assert_array_equal(plain.barrier_displacement, without.barrier_displacement)
 
 
 @pytest.mark.parametrize(
@@ -52,10 +52,10 @@ def test_zero_axial_ratio_is_the_model_without_axial_force():
 def test_rest_on_the_cubic_and_energy_balance(case, eta0):
     mu, phi, v = case
     r = _axial(mu, phi, v, eta0)
-    n_final = 2.0 * eta0 * float(r.w_final)  # N/N0 = 2 eta0 W0 (3.4.33)
+    n_final = 2.0 * eta0 * float(r.barrier_displacement)  # N/N0 = 2 eta0 W0 (3.4.33)
     assert 0.0 < n_final < 1.0
     k = 1.0 + n_final**2
-    s = float(r.s_final)
+    s = float(r.hinge_position)
     cubic = s**3 + 3 * mu * s**2 - 3 * k * s - 3 * mu * k  # (3.4.40)
     assert abs(cubic) < 1e-8 * (s**3 + 3 * mu * k)
     assert 1.0 < s <= np.sqrt(3.0 * k)
@@ -69,8 +69,8 @@ def test_axial_force_stiffens_the_barrier():
     displacement and the duration fall as eta0 grows, the final hinge distance rises."""
     eta0 = jnp.asarray([0.0, 2.0, 2.5, 5.0])
     r = _axial(jnp.full(4, 0.5), jnp.full(4, 2.0), jnp.ones(4), eta0)
-    assert np.all(np.diff(r.w_final) < 0) and np.all(np.diff(r.t_final) < 0)
-    assert np.all(np.diff(r.s_final) > 0)
+    assert np.all(np.diff(r.barrier_displacement) < 0) and np.all(np.diff(r.duration) < 0)
+    assert np.all(np.diff(r.hinge_position) > 0)
     # The hinges stiffen only once the beam has deflected: the crushing phase barely changes.
     np.testing.assert_allclose(r.damage, r.damage[0], rtol=1e-2)
 
@@ -86,9 +86,9 @@ def test_beam_that_locks_while_the_vehicle_crushes():
     v = jnp.array([0.8251699965190115, 0.8251699965190115, 1.3])
     r = _axial(mu, phi, v, eta0)
     assert np.all(np.isinf(r.t_string))
-    np.testing.assert_allclose(r.w_final, r.w_final[0], rtol=1e-9)
-    np.testing.assert_allclose(r.t_final, mu * v / phi, rtol=1e-12)
-    assert np.all(np.asarray(r.t_star) < np.asarray(r.t_final))
+    np.testing.assert_allclose(r.barrier_displacement, r.barrier_displacement[0], rtol=1e-9)
+    np.testing.assert_allclose(r.duration, mu * v / phi, rtol=1e-12)
+    assert np.all(np.asarray(r.t_star) < np.asarray(r.duration))
     work = r.crush_work + r.backing_work + r.hinge_work
     np.testing.assert_allclose(work, 0.5 * mu * v**2, rtol=1e-9)
 
@@ -102,13 +102,13 @@ def test_history_energy_at_every_saved_time():
     h = r.history
     # Three blocks of 40 (the string block repeats the state at rest: no string here).
     assert h.time.shape == (120,) and np.all(np.diff(h.time[:80]) > 0)
-    assert np.all(h.time[80:] == r.t_final) and np.all(h.string_work == 0.0)
+    assert np.all(h.time[80:] == r.duration) and np.all(h.string_work == 0.0)
     lost = 0.5 * mu * v**2 - h.vehicle_kinetic_energy
     work = phi * h.crush + h.backing_work + h.hinge_work + h.beam_kinetic_energy
     np.testing.assert_allclose(work, lost, atol=1e-8 * 0.5 * mu * v**2)
-    np.testing.assert_allclose(h.axial_force, 2.0 * eta0 * h.displacement, rtol=1e-12)
-    assert np.all(np.diff(h.hinge) >= -1e-8)  # (to the dense output's error near rest)
-    assert h.displacement[-1] == r.w_final and h.hinge[-1] == r.s_final
+    np.testing.assert_allclose(h.axial_force, 2.0 * eta0 * h.barrier_displacement, rtol=1e-12)
+    assert np.all(np.diff(h.hinge_position) >= -1e-8)  # (to the dense output's error near rest)
+    assert h.barrier_displacement[-1] == r.barrier_displacement and h.hinge_position[-1] == r.hinge_position
 
 
 def test_vmap_equals_loop():

@@ -30,7 +30,7 @@ REQUIRED = (
 POSITIVE = REQUIRED[:4] + (
     "peak_force_N",
     "peak_deceleration_m_s2",
-    "hinge_extent_m",
+    "hinge_position_m",
     "mass_ratio",
     "force_ratio",
     "speed_dimensionless",
@@ -73,7 +73,7 @@ def check_against_simulate(data, scene):
         "duration_s": result.duration,
         "peak_force_N": result.peak_force,
         "peak_deceleration_g": result.peak_deceleration / G,
-        "hinge_extent_m": result.hinge_extent,
+        "hinge_position_m": result.hinge_position,
         "mass_ratio": result.groups.mass_ratio,
         "force_ratio": result.groups.force_ratio,
         "speed_dimensionless": result.groups.normal_speed,
@@ -111,7 +111,7 @@ def test_run_summary_and_plots(capsys, tmp_path):
     for words in (
         "default scene", "mu", "phi", "V0", "kN*m", "vehicle damage", "mm",
         "max barrier deflection", "duration", "ms", "peak contact force", " g ",
-        "hinge extent", "Energy partition", "kJ", "%",
+        "hinges at rest", "Energy partition", "kJ", "%",
     ):
         assert words in out, words
     for name in ("histories.png", "deflected_shape.png"):
@@ -248,7 +248,7 @@ def test_steady_state_and_final_hinge_references():
     assert s1 * s2 == pytest.approx(1.0, rel=1e-14) and v0 == pytest.approx(3.0**0.5)
     for mu in (0.5, 5.0, 50.0):
         normal = bj.hinge.normal_impact(mu, 2.0, 1.0)
-        assert final_hinge(mu) == pytest.approx(float(normal.s_final), rel=1e-10)
+        assert final_hinge(mu) == pytest.approx(float(normal.hinge_position), rel=1e-10)
 
 
 def test_damage_bound_is_the_large_mass_limit():
@@ -330,12 +330,14 @@ def check_vehicle_path(result):
     import numpy as np
     from scipy.integrate import cumulative_trapezoid
 
-    n = int(result.model.history.n_saved)
-    h = jax.tree.map(lambda a: np.asarray(a)[:n] if np.ndim(a) else a, result.history)
+    h = jax.tree.map(np.asarray, result.history)
     normal = cumulative_trapezoid(h.vehicle_velocity, h.time, initial=0.0)
     along = cumulative_trapezoid(h.vehicle_tangential_velocity, h.time, initial=0.0)
     scale = np.max(np.abs(normal))
-    np.testing.assert_allclose(h.vehicle_displacement, normal, atol=1e-4 * scale)
+    # The history is linear between the solver's steps, and so is the velocity integrated
+    # here: the two differ by the steps' curvature (the path at the steps themselves is
+    # checked to 1e-4 in tests/test_oblique_impact.py).
+    np.testing.assert_allclose(h.vehicle_displacement, normal, atol=1e-3 * scale)
     np.testing.assert_allclose(h.vehicle_position, along, rtol=1e-9, atol=1e-12)
     exit_speed = np.hypot(h.vehicle_velocity[-1], h.vehicle_tangential_velocity[-1])
     assert exit_speed == pytest.approx(float(result.exit_speed), rel=1e-9)

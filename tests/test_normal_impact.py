@@ -53,7 +53,7 @@ def reference(mu, phi, v0):
     dw = quad(
         lambda s: smooth_rate(s) * smooth_velocity(s), s_star, alpha, wvar=(0.0, 2 * a - 1.0), **options
     )[0]
-    return dict(t_final=t_star + dt, w_final=w_star + dw, damage=0.5 * v0 * t_star, s_final=alpha)
+    return dict(duration=t_star + dt, barrier_displacement=w_star + dw, damage=0.5 * v0 * t_star, hinge_position=alpha)
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -84,7 +84,7 @@ def test_accelerative_phase_closed_form():
 
 def test_final_hinge_is_root_of_cubic():
     for mu in [1e-3, 0.5, 7.0, 1e4]:
-        alpha = float(normal_impact(mu, 2.0, 1.0).s_final)
+        alpha = float(normal_impact(mu, 2.0, 1.0).hinge_position)
         assert 1.0 <= alpha <= math.sqrt(3.0)
         assert abs(alpha**3 + 3 * mu * alpha**2 - 3 * alpha - 3 * mu) < 1e-12 * (1 + mu)
 
@@ -94,7 +94,7 @@ def test_heavy_rigid_vehicle_limit():
     and V/V0 = ((1 - S)/(1 + S))^(2/(3 mu)); errors are O(1/mu) and O(1/phi)."""
     mu, phi, v0 = 1e4, 1e5, 2.0
     h = normal_impact(mu, phi, v0, n_history=400).history
-    s, t, v = np.asarray(h.hinge), np.asarray(h.time), np.asarray(h.barrier_velocity)
+    s, t, v = np.asarray(h.hinge_position), np.asarray(h.time), np.asarray(h.barrier_velocity)
     mask = (np.arange(s.size) >= s.size // 2) & (s > 0.2) & (s < 0.9)
     assert mask.sum() > 5
     approx_t = 2 * v0 / 3 * np.log(1 / (1 - s[mask] ** 2))
@@ -107,9 +107,9 @@ def test_speed_only_rescales():
     """Report, after 3.2.20: for fixed S, T and V are proportional to V0 and W to V0^2."""
     a = normal_impact(2.0, 1.8, 1.0)
     b = normal_impact(2.0, 1.8, 7.0)
-    assert rel(b.t_final, 7.0 * a.t_final) < 1e-14
-    assert rel(b.w_final, 49.0 * a.w_final) < 1e-14
-    assert rel(b.s_final, a.s_final) < 1e-14
+    assert rel(b.duration, 7.0 * a.duration) < 1e-14
+    assert rel(b.barrier_displacement, 49.0 * a.barrier_displacement) < 1e-14
+    assert rel(b.hinge_position, a.hinge_position) < 1e-14
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -117,13 +117,13 @@ def test_rigid_barrier_when_force_ratio_at_most_one(method):
     mu, v0 = 4.0, 0.5
     for phi in [0.3, 1.0]:
         r = normal_impact(mu, phi, v0, method=method)
-        assert float(r.w_final) == 0.0 and float(r.s_final) == 0.0
+        assert float(r.barrier_displacement) == 0.0 and float(r.hinge_position) == 0.0
         assert rel(r.damage, mu * v0**2 / (2 * phi)) < 1e-14
-        assert rel(r.t_final, mu * v0 / phi) < 1e-14
+        assert rel(r.duration, mu * v0 / phi) < 1e-14
     # Continuous as phi -> 1+: the barrier barely moves and the vehicle does the crushing.
     r = normal_impact(mu, 1.0 + 1e-9, v0, method=method)
     assert rel(r.damage, mu * v0**2 / 2) < 1e-8
-    assert float(r.w_final) < 1e-8
+    assert float(r.barrier_displacement) < 1e-8
 
 
 # --- Energy: vehicle KE = crush + backing + hinge work + beam KE + vehicle KE, always. ---
@@ -152,8 +152,8 @@ def test_histories_are_physical(method):
     h = normal_impact(5.0, 2.0, 1.0, method=method, n_history=60).history
     n = h.time.shape[0] // 2
     assert np.all(np.diff(np.asarray(h.time)) >= 0)
-    assert np.all(np.diff(np.asarray(h.hinge)) >= -1e-12)
-    assert np.all(np.diff(np.asarray(h.displacement)) >= 0)
+    assert np.all(np.diff(np.asarray(h.hinge_position)) >= -1e-12)
+    assert np.all(np.diff(np.asarray(h.barrier_displacement)) >= 0)
     assert np.all(np.diff(np.asarray(h.barrier_velocity[n:])) <= 0)
     assert np.all(np.asarray(h.contact_force) > 0) and float(h.barrier_velocity[-1]) == 0.0
     # Vehicle and beam share their velocity throughout the decelerative phase.
@@ -170,7 +170,7 @@ def test_vmap_equals_loop(method):
     direct = normal_impact(mu, phi, v0, method=method)  # arrays are batched internally
     for i, case in enumerate(CASES):
         single = normal_impact(*case, method=method)
-        for field in ("damage", "w_final", "t_final", "s_final", "hinge_work"):
+        for field in ("damage", "barrier_displacement", "duration", "hinge_position", "hinge_work"):
             assert float(getattr(batched, field)[i]) == pytest.approx(float(getattr(single, field)), rel=1e-13)
             assert float(getattr(direct, field)[i]) == pytest.approx(float(getattr(single, field)), rel=1e-13)
 
@@ -179,7 +179,7 @@ def test_vmap_equals_loop(method):
 @pytest.mark.parametrize("mu, phi, v0", [(1.0, 2.0, 0.7), (300.0, 1.3, 3.0), (0.05, 20.0, 0.2)])
 def test_gradients_match_finite_differences(method, mu, phi, v0):
     x = jnp.array([mu, phi, v0])
-    fields = ("damage", "w_final", "t_final")
+    fields = ("damage", "barrier_displacement", "duration")
 
     def outputs(x):
         r = normal_impact(x[0], x[1], x[2], method=method, rtol=1e-11)
@@ -214,7 +214,7 @@ def test_property_ode_agrees_with_closed_form(mu, phi_minus_one, v0):
         assert all(np.all(np.isfinite(np.asarray(leaf))) for leaf in jax.tree.leaves(finite))
         assert np.isinf(r.t_string)
         assert energy_residual(r, mu, phi, v0) < 1e-8
-    for field in ("damage", "w_final", "t_final"):
+    for field in ("damage", "barrier_displacement", "duration"):
         assert rel(getattr(ode, field), getattr(cf, field)) < 1e-7, field
 
 
@@ -227,7 +227,7 @@ def test_property_range_batched():
     v0 = np.exp(rng.uniform(np.log(1e-4), np.log(1e2), n))
     cf = normal_impact(mu, phi, v0)
     ode = normal_impact(mu, phi, v0, method="ode", rtol=1e-10)
-    for field in ("damage", "w_final", "t_final"):
+    for field in ("damage", "barrier_displacement", "duration"):
         assert np.all(np.isfinite(np.asarray(getattr(cf, field))))
         assert rel(getattr(ode, field), getattr(cf, field)) < 1e-7, field
     balance = (cf.crush_work + cf.backing_work + cf.hinge_work) / (0.5 * mu * v0**2)
@@ -263,7 +263,7 @@ def test_bad_options():
 
 
 def test_bad_traced_input_fails_loudly():
-    run = jax.jit(lambda mu: normal_impact(mu, 2.0, 1.0).t_final)
+    run = jax.jit(lambda mu: normal_impact(mu, 2.0, 1.0).duration)
     assert np.isfinite(float(run(1.0)))
     with pytest.raises(Exception, match="mass_ratio"):
         float(run(-1.0))

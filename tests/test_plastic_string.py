@@ -70,7 +70,7 @@ def test_string_cases_vmap_equals_loop_and_limits():
     batched = _string(mu, phi, v, eta0)
     for i, case in enumerate(STRING_CASES):
         single = _string(*case)
-        for field in ("w_final", "damage", "t_final", "t_string", "string_work", "s_final"):
+        for field in ("barrier_displacement", "damage", "duration", "t_string", "string_work", "hinge_position"):
             np.testing.assert_allclose(
                 getattr(batched, field)[i], getattr(single, field), rtol=1e-12, err_msg=field
             )
@@ -79,12 +79,12 @@ def test_string_cases_vmap_equals_loop_and_limits():
     )
     # N/N0 = 2 eta0 W0 reaches 1 where the string begins (3.4.43).
     for r, case in ((string_after_crushing, STRING_CASES[0]), (string_while_crushing, STRING_CASES[1])):
-        assert np.isfinite(r.t_string) and r.t_final > r.t_string and r.string_work > 0
-        assert r.w_final > 1.0 / (2.0 * case[3])
+        assert np.isfinite(r.t_string) and r.duration > r.t_string and r.string_work > 0
+        assert r.barrier_displacement > 1.0 / (2.0 * case[3])
     assert np.isinf(no_string.t_string) and no_string.string_work == 0.0
     # A vehicle that crushes to rest decelerates at phi/mu throughout: T = mu V / phi.
     mu1, phi1, v1, _ = STRING_CASES[1]
-    assert float(string_while_crushing.t_final) == pytest.approx(mu1 * v1 / phi1, rel=1e-6)
+    assert float(string_while_crushing.duration) == pytest.approx(mu1 * v1 / phi1, rel=1e-6)
     assert np.all(_energy_error(batched, mu, v) < 1e-4)
 
 
@@ -97,7 +97,7 @@ def test_gradients_across_the_switch_into_the_string_match_finite_differences():
 
     def outputs(x):
         r = _string(x[:, 0], x[:, 1], x[:, 2], x[:, 3])
-        return jnp.stack([r.w_final, r.damage, r.t_final])  # (output, case)
+        return jnp.stack([r.barrier_displacement, r.damage, r.duration])  # (output, case)
 
     jacobian = np.asarray(jax.jacfwd(outputs)(jnp.asarray(x0)))  # (output, case, case, input)
     for j in range(4):
@@ -126,10 +126,10 @@ def test_history_through_the_string_stage():
     # 128 cells: 5e-5 at samples within the string stage (velocities there are means of
     # the half-step ones), 7e-6 at rest.
     np.testing.assert_allclose(work, lost, atol=2e-4 * 0.5 * mu * v**2)
-    np.testing.assert_allclose(h.string_profile[:, 0], h.displacement[79:119], rtol=1e-12)
+    np.testing.assert_allclose(h.string_profile[:, 0], h.barrier_displacement[79:119], rtol=1e-12)
     assert float(h.time[79]) == pytest.approx(float(r.t_string), rel=1e-12)
     np.testing.assert_allclose(h.axial_force[79:119], 1.0)
-    assert h.displacement[-1] == r.w_final and h.time[-1] == r.t_final
+    assert h.barrier_displacement[-1] == r.barrier_displacement and h.time[-1] == r.duration
     assert np.all(np.diff(h.string_profile, axis=0) >= -1e-15)  # no point moves back
 
 

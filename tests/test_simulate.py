@@ -8,6 +8,7 @@ import pytest
 
 import barrierjax as bj
 from barrierjax.hinge import oblique_impact
+from barrierjax.hinge.normal.results import N_SHAPE
 
 INCH, LBF = 0.0254, 4.4482216152605  # m, N
 POUND_MASS = LBF / INCH  # kg in one lbf s^2/in (175.127 kg)
@@ -42,7 +43,7 @@ def test_results_do_not_depend_on_units(method):
     assert float(ips.max_deflection) * INCH == pytest.approx(float(si.max_deflection), rel=1e-12)
     assert float(ips.duration) == pytest.approx(float(si.duration), rel=1e-12)
     assert float(ips.peak_force) * LBF == pytest.approx(float(si.peak_force), rel=1e-12)
-    assert float(ips.hinge_extent) * INCH == pytest.approx(float(si.hinge_extent), rel=1e-12)
+    assert float(ips.hinge_position) * INCH == pytest.approx(float(si.hinge_position), rel=1e-12)
     assert float(ips.backing_work) * LBF * INCH == pytest.approx(float(si.backing_work), rel=1e-12)
 
 
@@ -53,20 +54,20 @@ def test_energy_balance_in_physical_units():
 
 
 def test_histories_and_deflected_shape():
-    r = bj.simulate(si_scene(), n_history=100, n_shape=101)
+    r = bj.simulate(si_scene(), n_history=100)
     h = r.history
-    assert h.deflected_shape.shape == (200, 101)
+    assert h.deflected_shape.shape == (200, N_SHAPE)
     # Under the impact point the shape is the displacement history.
-    np.testing.assert_allclose(h.deflected_shape[:, 0], h.displacement, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(h.deflected_shape[:, 0], h.barrier_displacement, rtol=1e-12, atol=1e-15)
     # Nothing moves beyond the hinge; the final hinge is the hinge extent.
     beyond = np.asarray(h.x)[None, :] > np.asarray(h.hinge_position)[:, None] * (1 + 1e-9)
     assert np.all(np.asarray(h.deflected_shape)[beyond] == 0.0)
-    assert float(h.hinge_position[-1]) == pytest.approx(float(r.hinge_extent), rel=1e-12)
+    assert float(h.hinge_position[-1]) == pytest.approx(float(r.hinge_position), rel=1e-12)
     # The shape never rises with distance from the impact point, and displacement never
     # decreases in time (a rigid-plastic backing does not spring back).
     assert np.all(np.diff(np.asarray(h.deflected_shape), axis=1) <= 1e-12)
     assert np.all(np.diff(np.asarray(h.deflected_shape), axis=0) >= -1e-9)
-    assert float(h.displacement[-1]) == pytest.approx(float(r.max_deflection), rel=1e-12)
+    assert float(h.barrier_displacement[-1]) == pytest.approx(float(r.max_deflection), rel=1e-12)
     assert float(h.time[-1]) == pytest.approx(float(r.duration), rel=1e-12)
 
 
@@ -106,7 +107,7 @@ def test_axial_capacity_runs_the_axial_model():
     model = bj.hinge.axial_impact(
         g.mass_ratio, g.force_ratio, g.normal_speed, axial_ratio=g.axial_ratio
     )
-    assert float(result.max_deflection) == pytest.approx(float(model.w_final * g.scales.length))
+    assert float(result.max_deflection) == pytest.approx(float(model.barrier_displacement * g.scales.length))
     plain = bj.simulate(si_scene(), n_history=0)
     assert float(result.max_deflection) < float(plain.max_deflection)
     assert np.isinf(float(result.model.t_string))
@@ -137,7 +138,7 @@ def test_axial_scene_that_reaches_the_plastic_string():
     final_shape = np.asarray(h.deflected_shape[-1])
     assert final_shape[0] == pytest.approx(float(result.max_deflection), rel=1e-12)
     assert np.all(np.diff(final_shape) <= 1e-12)
-    beyond = np.asarray(h.x) > float(result.hinge_extent)
+    beyond = np.asarray(h.x) > float(result.hinge_position)
     assert beyond.any() and np.all(final_shape[beyond] == 0.0)
 
 

@@ -8,12 +8,16 @@ import math
 from pathlib import Path
 
 from ..hinge.oblique import ObliqueImpact
+from ..hinge.response import RESULT_UNITS
 from .cantilever import cantilever_number, run_cantilever
 from .output import EXIT_FAILED, CommandError, as_float, print_result, progress, progress_after
 
 __all__ = ["STANDARD_GRAVITY", "format_summary", "result_dict", "run_command"]
 
 STANDARD_GRAVITY = 9.80665  # m/s^2, to express decelerations in g
+
+# The SI unit that `result_dict`'s key of each scale's field ends with.
+_SI_SUFFIX = {"length": "_m", "time": "_s", "velocity": "_m_s", "energy": "_J", None: ""}
 
 
 def _model_name(result) -> str:
@@ -25,8 +29,11 @@ def _model_name(result) -> str:
 
 
 def result_dict(scene, result, name: str = "") -> dict:
-    """The scene and its `simulate` result as a flat JSON-ready dict in SI units (keys
-    carry the unit: `damage_m`, `duration_s`, `peak_deceleration_g`, energies in J)."""
+    """The scene and its `simulate` result as a flat JSON-ready dict in SI units: every
+    field of the one result vocabulary (`barrierjax.hinge.response.RESULT_UNITS`) under
+    its name with its unit appended (`damage_m`, `duration_s`, `exit_speed_m_s`,
+    `crush_work_J`, `exit_angle_deg`), and what the scene alone fixes
+    (`peak_deceleration_g`, `kinetic_energy_J`, the energy balance's error)."""
     barrier, vehicle, impact = scene.barrier, scene.vehicle, scene.impact
     groups, scales = result.groups, result.groups.scales
     deceleration = as_float(result.peak_deceleration)
@@ -53,32 +60,19 @@ def result_dict(scene, result, name: str = "") -> dict:
         "length_scale_m": as_float(scales.length),
         "force_scale_N": as_float(scales.force),
         "time_scale_s": as_float(scales.time),
-        "damage_m": as_float(result.damage),
-        "max_deflection_m": as_float(result.max_deflection),
-        "duration_s": as_float(result.duration),
+        **{
+            name + _SI_SUFFIX[unit]: as_float(getattr(result, name))
+            for name, unit in RESULT_UNITS.items()
+        },
         "accelerative_phase_s": as_float(result.model.t_star * scales.time),
         "string_start_s": _string_start(result, scales),
         "peak_force_N": as_float(result.peak_force),
         "peak_deceleration_m_s2": deceleration,
         "peak_deceleration_g": deceleration / STANDARD_GRAVITY,
-        "hinge_extent_m": as_float(result.hinge_extent),
-        "exit_speed_m_s": as_float(result.exit_speed),
-        "exit_angle_deg": as_float(result.exit_angle_deg),
         "kinetic_energy_J": as_float(result.kinetic_energy),
-        "crush_work_J": as_float(result.crush_work),
-        "backing_work_J": as_float(result.backing_work),
-        "hinge_work_J": as_float(result.hinge_work),
-        "friction_work_J": as_float(result.friction_work),
-        "slope_work_J": as_float(result.slope_work),
-        "string_work_J": as_float(result.string_work),
         "exit_kinetic_energy_J": as_float(0.5 * scene.vehicle.mass * result.exit_speed**2),
         "energy_balance_error_J": as_float(
-            result.crush_work
-            + result.backing_work
-            + result.hinge_work
-            + result.friction_work
-            + result.slope_work
-            + result.string_work
+            sum(getattr(result, name) for name in RESULT_UNITS if name.endswith("_work"))
             + 0.5 * scene.vehicle.mass * result.exit_speed**2
             - result.kinetic_energy
         ),
@@ -146,7 +140,8 @@ def format_summary(data: dict) -> str:
         f"  peak contact force            {data['peak_force_N'] / 1e3:10.1f} kN",
         f"  peak vehicle deceleration     {data['peak_deceleration_g']:10.1f} g"
         f"   ({data['peak_deceleration_m_s2']:.1f} m/s^2)",
-        f"  hinge extent (each side)      {data['hinge_extent_m']:10.3f} m",
+        f"  hinges at rest, ahead/behind  {data['hinge_position_m']:10.3f} m"
+        f" / {data['rear_hinge_position_m']:.3f} m",
         f"  exit speed and angle          {data['exit_speed_m_s']:10.2f} m/s"
         f" at {data['exit_angle_deg']:.1f} deg",
         "",

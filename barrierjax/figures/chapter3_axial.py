@@ -169,16 +169,16 @@ def _figure_3_4_9() -> Figure:
     h = jax.tree.map(np.asarray, result.history)
     fig = Figure(figsize=(9, 10), layout="constrained")
     ax_s, ax_v, ax_w, ax_n = fig.subplots(4, 1, sharex=True)
-    w_plain = float(result.w_final[0])
+    w_plain = float(result.barrier_displacement[0])
     for k, eta in enumerate(AXIAL_RATIOS_3_4_9):
         t = h.time[k]
-        reduction = 100.0 * (1.0 - float(result.w_final[k]) / w_plain)
+        reduction = 100.0 * (1.0 - float(result.barrier_displacement[k]) / w_plain)
         label = rf"$\eta_0$ = {eta:g}" + (f": $W_f$ {-reduction:+.1f} %" if eta else "")
         if np.isfinite(result.t_string[k]):
             label += f", string from T = {float(result.t_string[k]):.3f}"
-        ax_s.plot(t, h.hinge[k], color=f"C{k}", label=label)
+        ax_s.plot(t, h.hinge_position[k], color=f"C{k}", label=label)
         ax_v.plot(t, h.barrier_velocity[k], color=f"C{k}")
-        ax_w.plot(t, h.displacement[k], color=f"C{k}")
+        ax_w.plot(t, h.barrier_displacement[k], color=f"C{k}")
         ax_n.plot(t, h.axial_force[k], color=f"C{k}")
     ax_s.set_ylabel("hinge distance $S$")
     ax_s.legend(fontsize=9, title="final displacement against $\\eta_0$ = 0")

@@ -47,11 +47,11 @@ def _figure_3_2_2() -> Figure:
         # On the log time axis, draw the samples' interpolant in T (linear for S and V,
         # Hermite with slope V for W), not straight chords in log T.
         fine = np.union1d(t[t >= t_min], np.geomspace(t_min, t[-1], 600))
-        ax_s.plot(fine, np.interp(fine, *_unique(t, h.hinge[k])), color=color, label=label)
+        ax_s.plot(fine, np.interp(fine, *_unique(t, h.hinge_position[k])), color=color, label=label)
         ax_v.plot(fine, np.interp(fine, *_unique(t, h.barrier_velocity[k])), color=color)
         n = t.shape[0] // 2  # first half: accelerative phase, the vehicle faster
         ax_v.plot(t[1:n], h.vehicle_velocity[k][1:n], color=color, linestyle=":", lw=1)
-        w = plotting.hermite(fine, t, h.displacement[k], h.barrier_velocity[k])
+        w = plotting.hermite(fine, t, h.barrier_displacement[k], h.barrier_velocity[k])
         ax_w.plot(fine, w, color=color)
     s_star = float(result.s_star[0])
     ax_s.axhline(s_star, color="0.5", linestyle="--", lw=0.8)

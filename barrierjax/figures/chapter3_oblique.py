@@ -44,7 +44,6 @@ from __future__ import annotations
 
 import functools
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
@@ -81,20 +80,10 @@ def final_hinge(mass_ratio, r=0.0):
     return float(real[real > 0.0].max())
 
 
-def _cut(history, n):
-    """A history's per-step arrays cut to its `n` recorded steps (the grid `x` kept)."""
-    return {
-        k: np.asarray(v)[:n] if np.ndim(v) and k != "x" else np.asarray(v)
-        for k, v in history.items()
-    }
-
-
 @functools.cache
 def _oblique_examples():
     """The impacts of 3.3.4 (three angles) and 3.3.5-3.3.6, in one vmapped call: a list of
-    (result scalars, history cut to its recorded steps, vehicle path (along, normal))."""
-    from ..simulate import vehicle_path
-
+    (result scalars, history, vehicle path (along, normal))."""
     angles = np.radians(ANGLES_3_3_4)
     vn = np.append(SPEED_3_3_4 * np.sin(angles), NORMAL_SPEED_3_3_5)
     vh = np.append(SPEED_3_3_4 * np.cos(angles), TANGENTIAL_SPEED_3_3_5)
@@ -104,10 +93,9 @@ def _oblique_examples():
         FORCE_RATIO_3_3 * ones,
         jnp.asarray(vn),
         jnp.asarray(vh),
-        history=True,
+        n_history=_N_HISTORY,
         max_steps=_MAX_STEPS_3_3,
     )
-    along, normal = jax.vmap(vehicle_path)(result.history)
     fields = {
         k: np.asarray(getattr(result.history, k)) for k in result.history.__dataclass_fields__
     }
@@ -116,26 +104,29 @@ def _oblique_examples():
     }
     examples = []
     for i in range(vn.size):
-        n = int(fields["n_saved"][i])
         history = {k: v[i] for k, v in fields.items()}
-        path = (np.asarray(along[i])[:n], np.asarray(normal[i])[:n])
-        examples.append(({k: float(v[i]) for k, v in scalars.items()}, _cut(history, n), path))
+        path = (history["vehicle_position"], history["vehicle_displacement"])
+        examples.append(({k: float(v[i]) for k, v in scalars.items()}, history, path))
     return examples
+
+
+# Samples of each history drawn (equally spaced in time).
+_N_HISTORY = 400
 
 
 def _draw_oblique(axes, result, h, color, label):
     """S1, S2 / V0, V_N / P/P_b against T on three axes; T* marked on V0 and P."""
     ax_s, ax_v, ax_p = axes
     t = h["time"]
-    ax_s.plot(t, h["s1"], color=color)
-    ax_s.plot(t, h["s2"], color=color, linestyle="--")
-    ax_v.plot(t, h["v0"], color=color)
-    ax_v.plot(t, h["vehicle_normal_velocity"], color=color, linestyle=":")
+    ax_s.plot(t, h["hinge_position"], color=color)
+    ax_s.plot(t, h["rear_hinge_position"], color=color, linestyle="--")
+    ax_v.plot(t, h["barrier_velocity"], color=color)
+    ax_v.plot(t, h["vehicle_velocity"], color=color, linestyle=":")
     contact = slice(0, max(plotting.first_free(h), 1))
     ax_p.plot(t[contact], h["contact_force"][contact], color=color, label=label)
     t_star = result["t_star"]
     k = np.searchsorted(t, t_star)
-    ax_v.plot(t_star, np.interp(t_star, t, h["v0"]), "o", color=color, markersize=5)
+    ax_v.plot(t_star, np.interp(t_star, t, h["barrier_velocity"]), "o", color=color, markersize=5)
     ax_p.plot(t[k], h["contact_force"][k], "o", color=color, markersize=5)
 
 
@@ -175,14 +166,13 @@ def _finish_oblique(fig, axes, s_final):
 def _figure_3_3_3() -> Figure:
     phi, vh = FORCE_RATIO_3_3, TANGENTIAL_SPEED_3_3_3
     result = moving_load(phi, vh, T_END_3_3_3, max_steps=512)
-    h = result.history
-    h = _cut({k: getattr(h, k) for k in h.__dataclass_fields__}, int(h.n_saved))
+    h = {k: np.asarray(getattr(result.history, k)) for k in result.history.__dataclass_fields__}
     s1_inf, s2_inf, v0_inf = steady_state(phi, vh)
     fig = Figure(figsize=(8.5, 8), layout="constrained")
     ax_s, ax_v = fig.subplots(2, 1, sharex=True)
     t = h["time"]
-    ax_s.plot(t, h["s1"], color="C0", label="$S_1$ (ahead of the load)")
-    ax_s.plot(t, h["s2"], color="C1", label="$S_2$ (behind it)")
+    ax_s.plot(t, h["hinge_position"], color="C0", label="$S_1$ (ahead of the load)")
+    ax_s.plot(t, h["rear_hinge_position"], color="C1", label="$S_2$ (behind it)")
     for value, color, name in ((s1_inf, "C0", "S_1"), (s2_inf, "C1", "S_2")):
         ax_s.axhline(value, color=color, linestyle="--", lw=0.9)
         ax_s.annotate(
@@ -197,7 +187,7 @@ def _figure_3_3_3() -> Figure:
     ax_s.set_ylabel("hinge distance $S$")
     ax_s.set_ylim(0.0, 4.2)
     ax_s.legend(loc="center right", fontsize=9)
-    ax_v.plot(t, h["v0"], color="C2", label="$V_0$: barrier under the load")
+    ax_v.plot(t, h["barrier_velocity"], color="C2", label="$V_0$: barrier under the load")
     ax_v.axhline(v0_inf, color="C2", linestyle="--", lw=0.9)
     ax_v.annotate(
         rf"steady $V_0 = (\phi^2 - 1)^{{1/2}}/V_H$ = {v0_inf:.3f}",
@@ -210,7 +200,7 @@ def _figure_3_3_3() -> Figure:
     )
     ax_v.plot(
         t,
-        h["v0"] + h["slope"] * vh,
+        h["barrier_velocity"] + h["slope"] * vh,
         color="C3",
         linestyle=":",
         label=r"$V_0 + \theta V_H$: the load point's normal velocity",
@@ -298,10 +288,10 @@ def _figure_3_3_6() -> Figure:
     plotting.draw_plan(
         ax,
         h["x"],
-        h["displacement"][marks],
+        h["deflected_shape"][marks],
         [f"barrier at T = {t[k]:.2f}" for k in marks],
         path,
-        (h["contact_position"], h["contact_displacement"]),
+        (h["contact_position"], h["barrier_displacement"]),
         marks,
         leave,
         (TANGENTIAL_SPEED_3_3_5, NORMAL_SPEED_3_3_5),

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 from ... import _checks
 from ..._solve.sensitivity import forward_jacobian_jvp
 from ..normal.api import checked_inputs, normal_impact
-from ..normal.results import NormalImpact, rigid_barrier, scaled_history
+from ..normal.results import NormalImpact, normal_result, rigid_barrier, scaled_history
 from .stages import axial_stages
 
 
@@ -35,26 +35,29 @@ def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string
         )
 
     r = forward_jacobian_jvp(stages, n_differentiable=3)(mu, safe_phi, eta0 * speed**2, rtol)
-    history = scaled_history(r["history"], mu, speed) if n_history else None
-    t_final = eqx.error_if(
+    t_string = r["t_string"] * speed
+    history = None
+    if n_history:
+        history = scaled_history(r["history"], mu, speed, r["s_final"], t_string)
+    duration = eqx.error_if(
         r["t_final"] * speed,
         ~r["string_finished"] & yields,
         "the plastic string stage did not come to rest within its step budget",
     )
-    result = NormalImpact(
+    result = normal_result(
+        damage=r["damage"] * speed**2,
+        duration=duration,
+        displacement=r["w_final"] * speed**2,
+        hinge=r["s_final"],
+        crush_work=safe_phi * r["damage"] * speed**2,
+        backing_work=r["backing_work"] * speed**2,
+        hinge_work=(r["bending_work"] + r["stretching_work"]) * speed**2,
+        string_work=r["string_work"] * speed**2,
         s_star=r["s_star"],
         t_star=r["t_star"] * speed,
         v_star=r["v_star"] * speed,
         w_star=r["w_star"] * speed**2,
-        damage=r["damage"] * speed**2,
-        s_final=r["s_final"],
-        t_final=t_final,
-        w_final=r["w_final"] * speed**2,
-        crush_work=safe_phi * r["damage"] * speed**2,
-        backing_work=r["backing_work"] * speed**2,
-        hinge_work=(r["bending_work"] + r["stretching_work"]) * speed**2,
-        t_string=r["t_string"] * speed,
-        string_work=r["string_work"] * speed**2,
+        t_string=t_string,
         history=history,
     )
     rigid = rigid_barrier(mu, phi, speed, n_history, string_cells=string_cells)

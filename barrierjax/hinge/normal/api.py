@@ -12,7 +12,7 @@ from ..._solve.batching import sorted_chunks
 from ..._solve.sensitivity import forward_jacobian_jvp
 from .closed_form import solve_closed_form
 from .ode import solve_ode
-from .results import NormalImpact, finish_history, rigid_barrier
+from .results import NormalImpact, finish_history, normal_result, rigid_barrier
 
 
 @functools.partial(jax.jit, static_argnames=("method", "rtol", "n_history", "solver"))
@@ -28,21 +28,21 @@ def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
         damage = final.pop("damage")
     history = None
     if n_history:
-        history = finish_history(raw, mu, safe_phi, speed, acc, damage)
-    result = NormalImpact(
+        history = finish_history(raw, mu, safe_phi, speed, acc, damage, final["s_final"])
+    result = normal_result(
+        damage=damage * speed**2,
+        duration=final["t_final"] * speed,
+        displacement=final["w_final"] * speed**2,
+        hinge=final["s_final"],
+        crush_work=safe_phi * damage * speed**2,
+        backing_work=final["backing_work"] * speed**2,
+        hinge_work=final["hinge_work"] * speed**2,
+        string_work=jnp.zeros_like(mu),
         s_star=acc.s_star,
         t_star=acc.t_star * speed,
         v_star=acc.v_star * speed,
         w_star=acc.w_star * speed**2,
-        damage=damage * speed**2,
-        s_final=final["s_final"],
-        t_final=final["t_final"] * speed,
-        w_final=final["w_final"] * speed**2,
-        crush_work=safe_phi * damage * speed**2,
-        backing_work=final["backing_work"] * speed**2,
-        hinge_work=final["hinge_work"] * speed**2,
         t_string=jnp.full_like(mu, jnp.inf),
-        string_work=jnp.zeros_like(mu),
         history=history,
     )
     rigid = rigid_barrier(mu, phi, speed, n_history)
@@ -54,8 +54,7 @@ def checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history):
     inputs, as arrays."""
     if not 0.0 < rtol < 1.0:
         raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
-    if int(n_history) != n_history or n_history < 0 or n_history == 1:
-        raise ValueError(f"n_history must be 0 or an integer >= 2; got {n_history!r}")
+    _checks.history_samples(n_history)
     return (
         _checks.positive("mass_ratio", mass_ratio),
         _checks.positive("force_ratio", force_ratio),

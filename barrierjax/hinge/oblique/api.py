@@ -13,15 +13,7 @@ from ... import _checks
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
 from ..._solve.sensitivity import forward_jacobian_jvp
-from .results import (
-    MovingLoad,
-    ObliqueImpact,
-    build_history,
-    displacement_field,
-    finish,
-    padded,
-    plastic_zone_grid,
-)
+from .results import MovingLoad, ObliqueImpact, build_history, finish
 from .transitions import (
     OVERTAKEN_MESSAGE,
     initial_carry,
@@ -118,7 +110,7 @@ def oblique_impact(
     *,
     friction=0.0,
     rtol: float | None = None,
-    history: bool = False,
+    n_history: int = 0,
     max_steps: int | None = None,
 ) -> ObliqueImpact:
     """Oblique impact (report 3.3) in the report's dimensionless variables.
@@ -133,7 +125,8 @@ def oblique_impact(
     - `friction`: Coulomb coefficient between vehicle and barrier, non-negative.
     - `rtol`: relative tolerance of the step loop (absolute: 1e-3 rtol). `None`: 1e-8, or
       in float32 the smallest it can meet, 1.2e-5; a smaller one raises a `ValueError`.
-    - `history`: also return the recorded steps and the displacement field.
+    - `n_history`: samples of the history, equally spaced in time (0: none, the
+      cheapest).
     - `max_steps`: step budget of the whole run: every attempted step, and one for the
       start of each phase and segment (also the size of the recorded history). `None`:
       1024, and where that is spent (heavy vehicles, mu above about 50), four times as
@@ -145,6 +138,7 @@ def oblique_impact(
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap`.
     """
     _check_options(rtol, max_steps)
+    n_history = _checks.history_samples(n_history)
     mu = _checks.positive("mass_ratio", mass_ratio)
     phi = _force_ratio(force_ratio)
     vn = _checks.positive("normal_speed", normal_speed)
@@ -156,7 +150,7 @@ def oblique_impact(
     inputs = tuple(a.ravel() for a in args) if flat else args
 
     def solve(budget):
-        options = {"max_steps": budget, "history": bool(history), "n_x": _N_X}
+        options = {"max_steps": budget, "n_history": n_history, "n_x": _N_X}
         return _oblique_solved(*inputs, rtol, **options)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
@@ -177,13 +171,13 @@ def _of_lane(carry: Carry, lane) -> Carry:
 _LANES, _REFILL = 384, 48
 
 
-@functools.partial(jax.jit, static_argnames=("max_steps", "history", "n_x"))
-def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, history, n_x):
+@functools.partial(jax.jit, static_argnames=("max_steps", "n_history", "n_x"))
+def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
     def solve(*inputs_and_rtol):
         *inputs, rtol = inputs_and_rtol
         loop = step_loop(rtol, max_steps)
-        start = lambda x: initial_carry(loop, *x, history=history)
-        results = functools.partial(finish, history=history, n_x=n_x)
+        start = lambda x: initial_carry(loop, *x, history=n_history > 0)
+        results = functools.partial(finish, n_history=n_history, n_x=n_x)
         if mu.ndim == 0:
             return results(loop.solve(start(inputs)))
         return solve_queued(
@@ -208,15 +202,17 @@ def moving_load(
     *,
     rtol: float | None = None,
     max_steps: int | None = None,
+    n_history: int = 200,
 ) -> MovingLoad:
     """A constant force moving along the beam at constant speed: the accelerative-phase
     equations (3.3.16) alone, from S1 = S2 = S*, V0 = 0 to T = `t_end`. Its steady state
     is (3.3.18)-(3.3.19): S1 = phi - sqrt(phi^2 - 1), S2 = phi + sqrt(phi^2 - 1),
     V0 = sqrt(phi^2 - 1) / V_H.
 
-    `rtol` and `max_steps` as in `oblique_impact`; with `max_steps=None` a spent budget
-    grows to what the time reached says the run needs."""
+    `rtol`, `max_steps` and `n_history` (here at least 2) as in `oblique_impact`; with
+    `max_steps=None` a spent budget grows to what the time reached says the run needs."""
     _check_options(rtol, max_steps)
+    n_history = _checks.history_samples(n_history, optional=False)
     phi = _force_ratio(force_ratio)
     vh = _checks.positive("tangential_speed", tangential_speed)
     t_end = _checks.positive("t_end", t_end)
@@ -229,15 +225,15 @@ def moving_load(
         return _power_of_two_above(1.25 * budget / max(float(np.min(reached)), 1e-3))
 
     return _within_budget(
-        lambda budget: _moving_load(*args, rtol, max_steps=budget),
+        lambda budget: _moving_load(*args, rtol, max_steps=budget, n_history=n_history),
         max_steps,
         larger,
         moving_load=True,
     )
 
 
-@functools.partial(jax.jit, static_argnames=("max_steps",))
-def _moving_load(phi, vh, t_end, rtol, *, max_steps):
+@functools.partial(jax.jit, static_argnames=("max_steps", "n_history"))
+def _moving_load(phi, vh, t_end, rtol, *, max_steps, n_history):
     def solve(phi, vh, t_end, rtol):
         loop = step_loop(rtol, max_steps)
         one = jnp.ones_like(phi)
@@ -245,14 +241,14 @@ def _moving_load(phi, vh, t_end, rtol, *, max_steps):
             initial_carry(loop, one, phi, one, vh, 0.0 * one, history=True, t_end=t_end)
         )
         recording, y = solution.recording, solution.y
-        samples = padded(recording.samples, recording.count)
-        x = plastic_zone_grid(samples, recording.count, _N_X)
-        displacement = displacement_field(samples, recording.count, x)
         return MovingLoad(
             s1=y.s1,
             s2=y.s2,
             v0=y.speed,
-            history=build_history(samples, recording.count, solution.args, x, displacement),
+            steps=recording.count,
+            history=build_history(
+                recording.samples, recording.count, solution.args, _N_X, n_history
+            ),
         ), outcome_of(solution)
 
     solve = forward_jacobian_jvp(solve, n_differentiable=3)

@@ -14,67 +14,53 @@ import jax.numpy as jnp
 
 from ..._custom_types import Scalar
 from ..._solve.recorded_rk import Recording, Solution
+from ..response import ImpactHistory, ImpactResult, exit_angle_deg
 from .mechanism import Params, State, beam_kinetic_energy, velocity_field
 from .phases import MOTION
 from .transitions import Outcome, outcome_of
 
 
-class ObliqueImpactHistory(eqx.Module):
-    """One sample per accepted solver step, `n_saved` of them; the rest of each array
-    repeats the final state. `displacement[k, j]` is W(x[j], time[k])."""
+class ObliqueImpactHistory(ImpactHistory):
+    """Time histories of an oblique impact, dimensionless, under the names of
+    `barrierjax.hinge.response.HISTORY_UNITS`: `n_history` samples equally spaced in
+    time from contact to the last step (linear between the solver's accepted steps, so a
+    sum of terms that balances at every step balances at every sample), with
+    `contact_position` (the load's position F along the barrier) and `slope` (the
+    barrier's slope under it). `hinge_position` is the distance from the load to the
+    hinge ahead of it (S1), `rear_hinge_position` to the one behind (S2);
+    `deflected_shape[k, j]` is W(x[j], time[k]), x along the barrier from the impact
+    point on `N_X` points spanning every plastic zone."""
 
-    time: Scalar
-    s1: Scalar
-    s2: Scalar
-    v0: Scalar
-    vehicle_normal_velocity: Scalar
-    vehicle_tangential_velocity: Scalar
     contact_position: Scalar
-    contact_force: Scalar
     slope: Scalar
-    crush: Scalar
-    contact_displacement: Scalar
-    backing_work: Scalar
-    hinge_work: Scalar
-    friction_work: Scalar
-    slope_work: Scalar
-    beam_kinetic_energy: Scalar
-    vehicle_kinetic_energy: Scalar
-    x: Scalar
-    displacement: Scalar
-    n_saved: Scalar
 
 
-class ObliqueImpact(eqx.Module):
-    """Dimensionless response to an oblique impact (report 3.3)."""
+class ObliqueImpact(ImpactResult):
+    """Dimensionless response to an oblique impact (report 3.3), under the names of
+    `barrierjax.hinge.response.RESULT_UNITS`; `string_work` is zero (no axial force).
+    Its own: `t_star` (end of the crushing phase), `exit_normal_speed` and
+    `exit_tangential_speed` (the exit velocity's components; the angle is 0, with zero
+    derivatives, for a vehicle that ends at rest against the barrier, friction having
+    stopped its slide before the barrier stopped), `separated` (1 where the vehicle left
+    the barrier before it came to rest) and `steps` (the solver's accepted steps)."""
 
     t_star: Scalar
-    t_final: Scalar
-    s1_final: Scalar
-    s2_final: Scalar
-    w_final: Scalar
-    max_deflection: Scalar
-    damage: Scalar
     exit_normal_speed: Scalar
     exit_tangential_speed: Scalar
-    # The angle of the exit velocity to the barrier; 0 (with zero derivatives) for a vehicle
-    # that ends at rest against it, friction having stopped its slide before the barrier
-    # stopped, where the angle is undefined (arctan2(0, 0) would give NaN derivatives).
-    exit_angle_deg: Scalar
     separated: Scalar
-    crush_work: Scalar
-    backing_work: Scalar
-    hinge_work: Scalar
-    friction_work: Scalar
-    slope_work: Scalar
+    steps: Scalar
     history: ObliqueImpactHistory | None
 
 
 class MovingLoad(eqx.Module):
+    """The moving load's state at `t_end` (S1, S2, V0), the solver's accepted steps, and
+    its history (as `ObliqueImpactHistory`, without a vehicle)."""
+
     s1: Scalar
     s2: Scalar
     v0: Scalar
-    history: ObliqueImpactHistory | None
+    steps: Scalar
+    history: ObliqueImpactHistory
 
 
 def run_out_to_rest(y: State, f: State, in_contact):
@@ -163,71 +149,106 @@ def plastic_zone_grid(samples, count, n_x):
     )
 
 
-def build_history(samples, count, p: Params, x, displacement):
-    vn, vh = samples["vehicle_normal"], samples["vehicle_tangential"]
+def vehicle_path(time, contact_force, contact_position, normal, tangential, sunk):
+    """The vehicle's path in plan, `(along, normal)` at each recorded step: along the
+    barrier from the impact point and normal to it (towards the barrier) from the point
+    of contact.
+
+    While in contact (crushing and contact phases) the vehicle is at the contact point
+    F(T), and its body has moved `sunk` = W(F(T), T) + D(T) towards the barrier, the
+    barrier's displacement under it plus its crush: the integral of its normal velocity
+    (3.3.3). From the first step of the free phase on (where the contact force is zero:
+    after a separation, or the final state at rest) it moves on in a straight line at
+    its exit velocity."""
+    n = time.shape[-1]
+    free = contact_force == 0.0
+    first = jnp.where(jnp.any(free), jnp.argmax(free), n)
+    k = jnp.minimum(first, n - 1)
+    in_contact = jnp.arange(n) < first
+    elapsed = time - time[k]
+    return (
+        jnp.where(in_contact, contact_position, contact_position[k] + tangential * elapsed),
+        jnp.where(in_contact, sunk, sunk[k] + normal * elapsed),
+    )
+
+
+def build_history(samples, count, p: Params, n_x, n_history) -> ObliqueImpactHistory:
+    """The history at `n_history` equal steps of time from the first recorded step to the
+    last, interpolated linearly between the `count` recorded ones."""
+    samples = padded(samples, count)
+    x = plastic_zone_grid(samples, count, n_x)
+    time, vn, vh = samples["time"], samples["vehicle_normal"], samples["vehicle_tangential"]
+    sunk = samples["contact_displacement"] + samples["crush"]
+    along, normal = vehicle_path(time, samples["force"], samples["position"], vn, vh, sunk)
     vehicle_energy = 0.0 if p.moving_load else 0.5 * p.mu * (vn**2 + vh**2)
-    return ObliqueImpactHistory(
-        time=samples["time"],
-        s1=samples["s1"],
-        s2=samples["s2"],
-        v0=samples["v0"],
-        vehicle_normal_velocity=vn,
+    steps = dict(
+        vehicle_velocity=vn,
         vehicle_tangential_velocity=vh,
-        contact_position=samples["position"],
+        vehicle_position=along,
+        vehicle_displacement=normal,
+        barrier_velocity=samples["v0"],
+        barrier_displacement=samples["contact_displacement"],
         contact_force=samples["force"],
-        slope=samples["slope"],
         crush=samples["crush"],
-        contact_displacement=samples["contact_displacement"],
+        hinge_position=samples["s1"],
+        rear_hinge_position=samples["s2"],
         backing_work=samples["backing_work"],
         hinge_work=samples["hinge_work"],
         friction_work=samples["friction_work"],
         slope_work=samples["slope_work"],
+        string_work=jnp.zeros_like(vn),
         beam_kinetic_energy=beam_kinetic_energy(samples["v0"], samples["s1"], samples["s2"]),
         vehicle_kinetic_energy=jnp.zeros_like(vn) + vehicle_energy,
-        x=x,
-        displacement=displacement,
-        n_saved=count,
+        contact_position=samples["position"],
+        slope=samples["slope"],
+        deflected_shape=displacement_field(samples, count, x),
     )
+    t = jnp.linspace(time[0], time[count - 1], n_history)
+    at_t = jax.vmap(jnp.interp, in_axes=(None, None, 1), out_axes=1)
+    resampled = {
+        name: (at_t if values.ndim == 2 else jnp.interp)(t, time, values)
+        for name, values in steps.items()
+    }
+    return ObliqueImpactHistory(time=t, x=x, **resampled)
 
 
-def _exit_angle_deg(normal, tangential):
-    """The exit velocity's angle to the barrier, 0 for a vehicle at rest (the inner `where`
-    keeps arctan2's derivative at (0, 0), NaN, out of the gradient)."""
+def _speed(normal, tangential):
+    """|(normal, tangential)|, 0 with zero derivatives for a vehicle at rest (hypot's
+    derivative there is NaN)."""
     at_rest = (normal == 0.0) & (tangential == 0.0)
-    angle = jnp.arctan2(-normal, jnp.where(at_rest, 1.0, tangential))
-    return jnp.where(at_rest, 0.0, jnp.degrees(angle))
+    return jnp.where(at_rest, 0.0, jnp.hypot(normal, jnp.where(at_rest, 1.0, tangential)))
 
 
-def finish(solution: Solution, *, history, n_x) -> tuple[ObliqueImpact, Outcome]:
+def finish(solution: Solution, *, n_history, n_x) -> tuple[ObliqueImpact, Outcome]:
     """The results of a solve, and how it ended."""
     y, f, stage, p = solution.y, solution.derivative, solution.stage, solution.args
     remaining, extra = run_out_to_rest(y, f, ~stage.separated)
     recording = solution.recording
-    hist = None
-    if history:
-        x = plastic_zone_grid(recording.samples, recording.count, n_x)
-        samples = padded(recording.samples, recording.count)
-        displacement = displacement_field(samples, recording.count, x)
-        hist = build_history(samples, recording.count, p, x, displacement)
+    history = None
+    if n_history:
+        history = build_history(recording.samples, recording.count, p, n_x, n_history)
     w_final = y.contact_displacement + extra
-    t_final = y.time + remaining
-    exit_tangential = y.vehicle_tangential
+    duration = y.time + remaining
+    vn, vh = y.vehicle_normal, y.vehicle_tangential
     return ObliqueImpact(
-        t_star=stage.t_star,
-        t_final=t_final,
-        s1_final=y.s1,
-        s2_final=y.s2,
-        w_final=w_final,
-        max_deflection=_max_deflection(recording, y.position, w_final),
         damage=y.crush,
-        exit_normal_speed=y.vehicle_normal,
-        exit_tangential_speed=exit_tangential,
-        exit_angle_deg=_exit_angle_deg(y.vehicle_normal, exit_tangential),
-        separated=stage.separated.astype(t_final.dtype),
+        duration=duration,
+        max_deflection=_max_deflection(recording, y.position, w_final),
+        barrier_displacement=w_final,
+        hinge_position=y.s1,
+        rear_hinge_position=y.s2,
+        exit_speed=_speed(vn, vh),
+        exit_angle_deg=exit_angle_deg(vn, vh),
         crush_work=p.phi * y.crush,
         backing_work=y.backing_work,
         hinge_work=y.hinge_work,
         friction_work=y.friction_work,
         slope_work=y.slope_work,
-        history=hist,
+        string_work=jnp.zeros_like(duration),
+        t_star=stage.t_star,
+        exit_normal_speed=vn,
+        exit_tangential_speed=vh,
+        separated=stage.separated.astype(duration.dtype),
+        steps=recording.count,
+        history=history,
     ), outcome_of(solution)
