@@ -1,45 +1,44 @@
-"""Benchmark of the uniaxial rate laws (report 2.2, `barrierjax.materials`): error against run
-time for each law and each method from the slow to the stiff end, and the throughput of one
-update over a batch of material points.
+"""Benchmark of the uniaxial rate laws (report 2.2, `barrierjax.materials`) beside scipy and
+NumPy.
 
-(a) Error against run time. A ramp-and-hold strain history: constant rate alpha to 1 % strain
-    (eight times the yield strain of a 250 MPa, 200 GPa steel), then held as long again (the
-    stress relaxes towards the static curve). Rates 1e-3, 1, 1e4 per second; relaxation
-    times tau 1 s, 1e-3 s, 1e-7 s (the stiff end: tau alpha E / sigma0 spans 1e-10 .. 1e7).
-    Laws: `LinearOverstress` and `LogOverstress` against their closed forms (the constant-rate
-    solutions (2.2.4), (2.2.8) and their relaxation at fixed strain), `CowperSymonds` with
-    D = 1/tau against diffrax at rtol 1e-12 (itself checked against 1e-11). Methods: backward
-    Euler ("implicit"), the report's scheme (4.2.8)-(4.2.10) ("report"), forward Euler
-    ("explicit"), each with 16 .. 4096 equal steps, and Kvaerno5 ("diffrax") at rtol 1e-4 ..
-    1e-10; beside them scipy's `solve_ivp(method="Radau")`, what a user picks today for a
-    stiff ODE, on the same histories. Error = max over the samples of |sigma - reference| /
-    sigma0; "unstable" = non-finite or above sigma0. Time = one jitted call per history,
-    best of 3, compile excluded (reported separately).
-(b) Throughput: one backward-Euler update of `CowperSymonds` (D = 40/s, q = 5, report 4.3.1)
-    with its consistent tangent over a batch of 1e3 .. 1e6 material points (random stress,
-    plastic strain and strain increment, dt = 1e-4 s), jitted and vmapped, against the same
-    algorithm (rtsafe, the same iteration count) written in vectorised NumPy, side by side.
+    python benchmarks/materials.py [--quick] [--out DIR] [--seed N] [--no-plots]
 
-    python benchmarks/materials.py            # full run, about 10 minutes on 2 cores
-    python benchmarks/materials.py --quick    # smoke run
+Tables: (1) accuracy against time of each law and method on ramp-and-hold strain histories
+(constant rate alpha to 1 % strain, eight times the yield strain of a 250 MPa, 200 GPa
+steel, then held as long; rates 1e-3, 1, 1e4 /s; relaxation times tau 1, 1e-3, 1e-7 s),
+against the closed forms of `LinearOverstress` and `LogOverstress` ((2.2.4), (2.2.8) and
+their relaxation) and, for the other laws, diffrax at rtol 1e-12 (checked against 1e-11).
+Methods: backward Euler ("implicit"), the report's scheme (4.2.8)-(4.2.10) ("report"),
+forward Euler ("explicit") at 16 .. 4096 equal steps, Kvaerno5 ("diffrax") at rtol 1e-4 ..
+1e-10, and scipy's `solve_ivp(method="Radau")` (what a user picks for a stiff ODE) side by
+side. Error = max |sigma - reference| / sigma0; "unstable" = non-finite or above sigma0.
+(2) Throughput of one backward-Euler `CowperSymonds` update with its tangent over 1e3 ..
+1e6 material points, jitted and vmapped, against the same algorithm in vectorised NumPy.
+(3) The first call in a fresh process. Writes `materials.json` and
+`materials_error_vs_time.png` to `--out`.
 """
 
-import json
-import math
-import os
-import sys
-import time
-from pathlib import Path
-
-import equinox as eqx
 import jax
-import jax.numpy as jnp
-import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import argument_parser, drain, meta, save, source_fingerprint, sources_changed
+import math
+import time
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from harness import (
+    argument_parser,
+    drain,
+    failure,
+    first_calls,
+    pyplot,
+    save_figure,
+    steady,
+    table,
+    write_json,
+)
 
 from barrierjax.materials.overstress import (
     CowperSymonds,
@@ -56,47 +55,20 @@ E = 200e9  # Pa
 SIGMA0 = 250e6  # Pa
 STRAIN = 0.01
 SIGMA_C = 20e6  # Pa, the logarithmic law's characteristic stress
+LAWS = ("LinearOverstress", "LogOverstress", "CowperSymonds", "SinhOverstress",
+        "StrainDependentOverstress", "GilmanJohnston")
+CLOSED_FORMS = ("LinearOverstress", "LogOverstress")
+REFERENCE_STEPS = 1 << 20  # the diffrax reference's step budget (the runs' is 65536)
+RADAU = ("LinearOverstress", "LogOverstress", "CowperSymonds")  # `numpy_flow` has these
 
 
 def config(quick: bool) -> dict:
     if quick:
-        return {
-            "laws": LAWS[:3],
-            "rates": [1.0],
-            "taus": [1e-3],
-            "steps": [16, 64],
-            "diffrax_rtols": [1e-6],
-            "samples": 17,
-            "batches": [1000],
-            "repeats": 1,
-        }
-    return {
-        "laws": LAWS,
-        "rates": [1e-3, 1.0, 1e4],
-        "taus": [1.0, 1e-3, 1e-7],
-        "steps": [16, 64, 256, 1024, 4096],
-        "diffrax_rtols": [1e-4, 1e-6, 1e-8, 1e-10],
-        "samples": 65,
-        "batches": [1000, 10_000, 100_000, 1_000_000],
-        "repeats": 3,
-    }
-
-
-# ---------------------------------------------------------------------------------------
-# The laws and their references.
-
-
-LAWS = (
-    "LinearOverstress",
-    "LogOverstress",
-    "CowperSymonds",
-    "SinhOverstress",
-    "StrainDependentOverstress",
-    "GilmanJohnston",
-)
-CLOSED_FORMS = ("LinearOverstress", "LogOverstress")
-REFERENCE_STEPS = 1 << 20  # the diffrax reference's step budget (the runs' is 65536)
-RADAU = ("LinearOverstress", "LogOverstress", "CowperSymonds")  # `numpy_flow` has these
+        return {"laws": LAWS[:3], "rates": [1.0], "taus": [1e-3], "steps": [16, 64], "diffrax_rtols": [1e-6],
+                    "samples": 17, "batches": [1000], "repeats": 1}
+    return {"laws": LAWS, "rates": [1e-3, 1.0, 1e4], "taus": [1.0, 1e-3, 1e-7], "steps": [16, 64, 256, 1024, 4096],
+                "diffrax_rtols": [1e-4, 1e-6, 1e-8, 1e-10], "samples": 65, "batches": [1000, 10_000, 100_000, 1_000_000],
+                "repeats": 3}
 
 
 def make_law(name, tau):
@@ -118,27 +90,20 @@ def make_law(name, tau):
 
 def history(rate, n):
     """Ramp to STRAIN at `rate` in n/2 steps, then hold for as long in n/2 steps."""
-    t_ramp = STRAIN / rate
-    half = n // 2
-    times = np.concatenate(
-        [np.linspace(0.0, t_ramp, half + 1), np.linspace(t_ramp, 2 * t_ramp, half + 1)[1:]]
-    )
-    strains = np.minimum(times * rate, STRAIN)
-    return times, strains
+    t_ramp, half = STRAIN / rate, n // 2
+    times = np.concatenate([np.linspace(0.0, t_ramp, half + 1), np.linspace(t_ramp, 2 * t_ramp, half + 1)[1:]])
+    return times, np.minimum(times * rate, STRAIN)
 
 
 def closed_form(name, rate, tau, times):
     """The exact stress of the linear and logarithmic laws on the ramp-and-hold history."""
-    t_yield = SIGMA0 / (E * rate)
-    t_ramp = STRAIN / rate
+    t_yield, t_ramp = SIGMA0 / (E * rate), STRAIN / rate
     s = np.clip(times, t_yield, t_ramp) - t_yield  # time flowing during the ramp
     hold = np.maximum(times - t_ramp, 0.0)
     if name == "LinearOverstress":
-        over = E * rate * tau * -np.expm1(-s / tau)  # (2.2.4)
-        over = over * np.exp(-hold / tau)
+        over = E * rate * tau * -np.expm1(-s / tau) * np.exp(-hold / tau)  # (2.2.4)
     else:
-        ratio = E * rate * tau / SIGMA_C
-        beta = E * rate / SIGMA_C + 1.0 / tau
+        ratio, beta = E * rate * tau / SIGMA_C, E * rate / SIGMA_C + 1.0 / tau
         u = np.exp(-beta * s) + -np.expm1(-beta * s) / (1.0 + ratio)  # (2.2.8), exact
         u = 1.0 - (1.0 - u) * np.exp(-hold / tau)  # relaxation at fixed strain
         over = -SIGMA_C * np.log(u)
@@ -165,22 +130,7 @@ def _response(law, times, strains, method, rtol, max_steps=65536):
 
 
 def solve(law, times, strains, method, rtol=1e-8, max_steps=65536):
-    return np.asarray(
-        _response(law, jnp.asarray(times), jnp.asarray(strains), method, rtol, max_steps)
-    )
-
-
-def timed(fn, repeats):
-    """(result, best seconds, first-call seconds): the first call includes compilation."""
-    t0 = time.perf_counter()
-    out = jax.block_until_ready(fn())
-    first = time.perf_counter() - t0
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(fn())
-        best = min(best, time.perf_counter() - t0)
-    return out, best, first
+    return np.asarray(_response(law, jnp.asarray(times), jnp.asarray(strains), method, rtol, max_steps))
 
 
 def numpy_flow(name, tau):
@@ -207,105 +157,9 @@ def radau(name, tau, times, strains, rtol):
         return [flow(x) * np.sign(stress) / E if x > 0 else 0.0]
 
     with np.errstate(over="ignore", invalid="ignore"):
-        sol = solve_ivp(
-            field,
-            (times[0], times[-1]),
-            [0.0],
-            method="Radau",
-            t_eval=times,
-            rtol=rtol,
-            atol=1e-6 * rtol,
-            first_step=min(np.diff(times)) / 16,
-        )
+        sol = solve_ivp(field, (times[0], times[-1]), [0.0], method="Radau", t_eval=times, rtol=rtol,
+                        atol=1e-6 * rtol, first_step=min(np.diff(times)) / 16)
     return E * (strains - sol.y[0]) if sol.success else np.full_like(times, np.nan)
-
-
-def first_line(exc) -> str:
-    """The line of an exception's message that says what went wrong."""
-    lines = str(exc).strip().splitlines() or [type(exc).__name__]
-    reason = [x for x in lines if "maximum number" in x or "Error:" in x]
-    return (reason or lines)[0].strip()[:120]
-
-
-def run_method(law, name, tau, method, times, strains, rtol, cfg):
-    """(stress history, best seconds, first-call seconds) of one method on one history."""
-    if method == "scipy Radau":
-        t0 = time.perf_counter()
-        stress = radau(name, tau, times, strains, rtol)
-        return stress, time.perf_counter() - t0, time.perf_counter() - t0
-    stress, best, first = timed(
-        lambda: _response(law, jnp.asarray(times), jnp.asarray(strains), method, rtol or 1e-8),
-        cfg["repeats"],
-    )
-    return np.asarray(stress), best, first
-
-
-def section_error_vs_time(cfg):
-    print(
-        "\n(a) Error against run time: ramp to 1 % at rate alpha, hold as long; error = max |dsigma| / sigma0"
-    )
-    header = f"{'law':<26}{'method':<12}{'n / rtol':>9}{'alpha':>8}{'tau':>8}{'error':>10}{'time s':>10}{'compile s':>10}"
-    print(header)
-    rows = []
-    for name in cfg["laws"]:
-        for rate in cfg["rates"]:
-            for tau in cfg["taus"]:
-                law = make_law(name, tau)
-                references = {}
-                runs = [
-                    (m, n, None) for m in ("implicit", "report", "explicit") for n in cfg["steps"]
-                ]
-                runs += [("diffrax", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"]]
-                if name in RADAU:
-                    runs += [
-                        ("scipy Radau", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"][:2]
-                    ]
-                for method, n, rtol in runs:
-                    times, strains = history(rate, n)
-                    row = {"law": name, "method": method, "steps": n, "rtol": rtol}
-                    row.update(rate=rate, tau=tau, error=None, stable=False, failure=None)
-                    row.update(time_s=None, compile_s=None, reference_check=None)
-                    if n not in references:
-                        try:
-                            references[n] = reference(name, rate, tau, times)
-                        except Exception as exc:  # noqa: BLE001
-                            drain()
-                            references[n] = exc
-                    if isinstance(references[n], Exception):
-                        row["failure"] = "no reference: " + first_line(references[n])
-                        row["stable"] = None
-                        rows.append(row)
-                        continue
-                    try:
-                        ref, row["reference_check"] = references[n]
-                        stress, best, first = run_method(
-                            law, name, tau, method, times, strains, rtol, cfg
-                        )
-                    except Exception as exc:  # noqa: BLE001 - a failure is a result
-                        drain()
-                        row["failure"] = first_line(exc)
-                        rows.append(row)
-                        print(
-                            f"{name:<26}{method:<12}{rtol or n!s:>9}{rate:>8.0e}{tau:>8.0e}  FAILED: {row['failure']}",
-                            flush=True,
-                        )
-                        continue
-                    err = float(np.max(np.abs(stress - ref)) / SIGMA0)
-                    row.update(time_s=best, compile_s=max(first - best, 0.0))
-                    row["stable"] = bool(np.all(np.isfinite(stress))) and err < 1.0
-                    row["error"] = err if np.isfinite(err) else None
-                    rows.append(row)
-                    knob = f"{rtol:.0e}" if rtol else f"{n}"
-                    shown = f"{err:10.2e}" if row["stable"] else f"{'unstable':>10}"
-                    print(
-                        f"{name:<26}{method:<12}{knob:>9}{rate:>8.0e}{tau:>8.0e}{shown}{best:>10.2e}{row['compile_s']:>10.1f}",
-                        flush=True,
-                    )
-    return rows
-
-
-# ---------------------------------------------------------------------------------------
-# (b) Throughput of one update.
 
 
 def numpy_cowper_symonds(stress, plastic_strain, d_strain, dt, D, q, iterations):
@@ -337,175 +191,144 @@ def numpy_cowper_symonds(stress, plastic_strain, d_strain, dt, D, q, iterations)
     return new_stress, new_plastic, tangent
 
 
-def section_throughput(cfg, seed):
-    print(
-        "\n(b) Throughput: one backward-Euler Cowper-Symonds update with its tangent (D = 40/s, q = 5, dt = 1e-4 s)"
-    )
-    print(
-        f"{'points':>10}{'jax s':>11}{'ns/point':>10}{'numpy s':>11}{'ns/point':>10}{'numpy/jax':>10}{'compile s':>10}"
-    )
-    law = CowperSymonds(E, SIGMA0, 40.0, 5.0)
-    rng = np.random.default_rng(seed)
-    update = jax.jit(
-        jax.vmap(
-            lambda s, ep, de: update_with_tangent(
-                law, s, OverstressState(ep, jnp.abs(ep)), de, 1e-4
-            )
-        )
-    )
+def run_method(law, name, tau, method, times, strains, rtol, cfg):
+    """(stress history, seconds) of one method on one history."""
+    if method == "scipy Radau":
+        start = time.perf_counter()
+        stress = radau(name, tau, times, strains, rtol)
+        return stress, time.perf_counter() - start
+    call = lambda: _response(law, jnp.asarray(times), jnp.asarray(strains), method, rtol or 1e-8)
+    return np.asarray(call()), steady(call, reps=cfg["repeats"])
+
+
+def error_vs_time(cfg) -> list:
     rows = []
-    for n in cfg["batches"]:
-        stress = rng.uniform(-1.5, 1.5, n) * SIGMA0
-        plastic = rng.uniform(-1e-2, 1e-2, n)
-        d_strain = rng.uniform(-2e-3, 2e-3, n)
-        args = tuple(jnp.asarray(a) for a in (stress, plastic, d_strain))
-        out, best, first = timed(lambda args=args: update(*args), cfg["repeats"])
-        t0 = time.perf_counter()
-        ref = numpy_cowper_symonds(stress, plastic, d_strain, 1e-4, 40.0, 5.0, law.iterations)
-        numpy_s = time.perf_counter() - t0
-        agree = float(np.max(np.abs(np.asarray(out[0]) - ref[0])) / SIGMA0)
-        row = {
-            "points": n,
-            "jax_s": best,
-            "numpy_s": numpy_s,
-            "compile_s": max(first - best, 0.0),
-            "max_stress_difference": agree,
-        }
-        rows.append(row)
-        print(
-            f"{n:>10d}{best:>11.3e}{best / n * 1e9:>10.1f}{numpy_s:>11.3e}{numpy_s / n * 1e9:>10.1f}"
-            f"{numpy_s / best:>10.1f}{row['compile_s']:>10.1f}   (stresses agree to {agree:.1e} sigma0)",
-            flush=True,
-        )
+    for name in cfg["laws"]:
+        for rate in cfg["rates"]:
+            for tau in cfg["taus"]:
+                law, references = make_law(name, tau), {}
+                runs = [(m, n, None) for m in ("implicit", "report", "explicit") for n in cfg["steps"]]
+                runs += [("diffrax", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"]]
+                runs += [("scipy Radau", cfg["samples"] - 1, r) for r in cfg["diffrax_rtols"][:2] if name in RADAU]
+                for method, n, rtol in runs:
+                    times, strains = history(rate, n)
+                    row = {"law": name, "method": method, "steps": n, "rtol": rtol, "rate": rate, "tau": tau, "error": None,
+                               "stable": False, "failure": None, "time_s": None}
+                    try:
+                        if n not in references:
+                            references[n] = reference(name, rate, tau, times)
+                    except Exception as exc:  # noqa: BLE001 - a failure is a result
+                        drain()
+                        references[n] = "no reference: " + failure(exc)
+                    if isinstance(references[n], str):
+                        rows.append(dict(row, failure=references[n], stable=None))
+                        continue
+                    try:
+                        stress, seconds = run_method(law, name, tau, method, times, strains, rtol, cfg)
+                    except Exception as exc:  # noqa: BLE001 - a failure is a result
+                        drain()
+                        rows.append(dict(row, failure=failure(exc)))
+                        continue
+                    err = float(np.max(np.abs(stress - references[n][0])) / SIGMA0)
+                    rows.append(dict(row, time_s=seconds, stable=bool(np.isfinite(err) and err < 1.0),
+                                     error=err if np.isfinite(err) else None, reference_check=references[n][1]))
     return rows
 
 
-def plot(out: Path, rows) -> Path:
-    import matplotlib
+def summarise(rows) -> list:
+    """Per law, method and setting (steps or rtol): the worst error over rates and relaxation
+    times, the histories that were unstable or failed, and the mean time."""
+    out = {}
+    for r in (r for r in rows if r["stable"] is not None):
+        key = (r["law"], r["method"], f"rtol {r['rtol']:.0e}" if r["rtol"] else f"{r['steps']} steps")
+        e = out.setdefault(key, {"law": key[0], "method": key[1], "setting": key[2], "histories": 0, "unstable": 0,
+                                     "worst_error": 0.0, "times": []})
+        e["histories"] += 1
+        e["unstable"] += not r["stable"]
+        e["worst_error"] = max(e["worst_error"], r["error"] if r["stable"] else math.inf)
+        e["times"].append(r["time_s"] or math.nan)
+    for e in out.values():
+        e["mean_time_s"] = float(np.mean(e.pop("times")))
+    return list(out.values())
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def throughput(cfg, seed) -> list:
+    law, rng, rows = CowperSymonds(E, SIGMA0, 40.0, 5.0), np.random.default_rng(seed), []
+    update = jax.jit(jax.vmap(lambda s, ep, de: update_with_tangent(law, s, OverstressState(ep, jnp.abs(ep)), de, 1e-4)))
+    for n in cfg["batches"]:
+        stress, plastic, d_strain = (rng.uniform(-1.5, 1.5, n) * SIGMA0, rng.uniform(-1e-2, 1e-2, n),
+                                     rng.uniform(-2e-3, 2e-3, n))
+        args = tuple(jnp.asarray(a) for a in (stress, plastic, d_strain))
+        seconds = steady(update, *args, reps=max(cfg["repeats"], 3))
+        start = time.perf_counter()
+        ref = numpy_cowper_symonds(stress, plastic, d_strain, 1e-4, 40.0, 5.0, law.iterations)
+        numpy_s = time.perf_counter() - start
+        agree = float(np.max(np.abs(np.asarray(update(*args)[0]) - ref[0])) / SIGMA0)
+        rows.append({"points": n, "jax_s": seconds, "jax_ns": seconds / n * 1e9, "numpy_s": numpy_s,
+                         "numpy_ns": numpy_s / n * 1e9, "ratio": numpy_s / seconds, "max_stress_difference": agree})
+    return rows
+
+
+FIRST_SETUP = """
+    import numpy as np, jax, jax.numpy as jnp
+    from barrierjax.materials.overstress import CowperSymonds, OverstressState
+    from barrierjax.materials.response import uniaxial_response, update_with_tangent
+    law = CowperSymonds(200e9, 250e6, 40.0, 5.0)
+    times = jnp.linspace(0.0, 0.02, 257); strains = jnp.minimum(times, 0.01)
+    s, ep, de = jnp.linspace(-3e8, 3e8, 10000), jnp.zeros(10000), jnp.full(10000, 1e-3)
+    update = jax.vmap(lambda s, ep, de: update_with_tangent(law, s, OverstressState(ep, jnp.abs(ep)), de, 1e-4))
+"""
+FIRST_CASES = {
+    "uniaxial_response, implicit, 256 steps": (FIRST_SETUP, "uniaxial_response(law, times, strains).stress"),
+    "uniaxial_response, diffrax": (FIRST_SETUP, "uniaxial_response(law, times, strains, method='diffrax').stress"),
+    "update_with_tangent, 1e4 points (vmap)": (FIRST_SETUP, "update(s, ep, de)"),
+}
+
+
+def plot(args, rows):
+    plt = pyplot()
     laws = [law for law in LAWS if any(r["law"] == law for r in rows)]
     ncols = min(3, len(laws))
-    nrows = -(-len(laws) // ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(5 * ncols, 4.5 * nrows), sharey=True)
+    fig, axes = plt.subplots(-(-len(laws) // ncols), ncols, figsize=(5 * ncols, 4.5 * -(-len(laws) // ncols)),
+                             sharey=True)
     axes = np.atleast_1d(axes).ravel()
-    markers = {"implicit": "o", "report": "s", "explicit": "x", "diffrax": "^", "scipy Radau": "v"}
     for ax, name in zip(axes, laws):
-        for k, method in enumerate(markers):
-            mine = [r for r in rows if r["law"] == name and r["method"] == method]
-            ok = [r for r in mine if r["stable"] and r["error"]]
-            bad = [r for r in mine if not r["stable"] and r["time_s"]]
-            ax.loglog(
-                [r["time_s"] for r in ok],
-                [max(r["error"], 1e-16) for r in ok],
-                markers[method],
-                color=f"C{k}",
-                label=method,
-                alpha=0.7,
-            )
-            if bad:
-                ax.loglog(
-                    [r["time_s"] for r in bad],
-                    [1.0] * len(bad),
-                    markers[method],
-                    color=f"C{k}",
-                    mfc="none",
-                    ms=10,
-                )
-        ax.set_title(name)
-        ax.set_xlabel("time per history, s")
+        for k, method in enumerate(("implicit", "report", "explicit", "diffrax", "scipy Radau")):
+            mine = [r for r in rows if r["law"] == name and r["method"] == method and r["time_s"]]
+            ok = [r for r in mine if r["stable"]]
+            ax.loglog([r["time_s"] for r in ok], [max(r["error"], 1e-16) for r in ok], "osx^v"[k], color=f"C{k}",
+                      label=method, alpha=0.7)
+            bad = [r for r in mine if not r["stable"]]
+            ax.loglog([r["time_s"] for r in bad], [1.0] * len(bad), "osx^v"[k], color=f"C{k}", mfc="none", ms=10)
+        ax.set(title=name, xlabel="time per history (s)")
         ax.grid(True, which="both", alpha=0.3)
-    for ax in axes[::ncols]:
-        ax.set_ylabel("max |error| / sigma0 (unstable: hollow, at 1)")
+    axes[0].set_ylabel("max |error| / sigma0 (unstable: hollow, at 1)")
     axes[0].legend()
-    fig.suptitle(
-        "Uniaxial rate laws: error against run time over rates 1e-3 .. 1e4/s and tau 1 .. 1e-7 s"
-    )
-    return save(fig, out / "materials_error_vs_time.png")
-
-
-def summarise(rows) -> dict:
-    """Per law and method: how many histories were unstable or failed, and the worst error
-    over rates and relaxation times at the finest setting (most steps, or tightest rtol)."""
-    out = {}
-    unchecked = [r for r in rows if r["stable"] is None]
-    rows = [r for r in rows if r["stable"] is not None]
-    for r in rows:
-        key = f"{r['law']} / {r['method']}"
-        entry = out.setdefault(key, {"histories": 0, "unstable": 0, "unstable_cases": []})
-        entry["histories"] += 1
-        if not r["stable"]:  # unstable, or failed (a diffrax step budget spent)
-            entry["unstable"] += 1
-            entry["unstable_cases"].append(
-                {k: r[k] for k in ("steps", "rtol", "rate", "tau", "failure")}
-            )
-    for key, entry in out.items():
-        mine = [r for r in rows if f"{r['law']} / {r['method']}" == key]
-        finest = max(mine, key=lambda r: (-(r["rtol"] or 0.0), r["steps"]))
-        at_finest = [
-            r for r in mine if (r["rtol"], r["steps"]) == (finest["rtol"], finest["steps"])
-        ]
-        errors = [r["error"] if r["stable"] else math.inf for r in at_finest]
-        entry["finest"] = {"steps": finest["steps"], "rtol": finest["rtol"]}
-        entry["finest_worst_error"] = max(errors)
-        entry["finest_mean_time_s"] = float(np.mean([r["time_s"] or np.nan for r in at_finest]))
-    out["without reference"] = sorted(
-        {f"{r['law']} alpha {r['rate']:g} tau {r['tau']:g}" for r in unchecked}
-    )
-    return out
+    save_figure(fig, args, "materials_error_vs_time")
 
 
 def main(argv=None):
     args = argument_parser(__doc__).parse_args(argv)
     cfg = config(args.quick)
-    load_start = os.getloadavg()
-    sources = source_fingerprint()
-    start = time.perf_counter()
-    print(
-        f"materials benchmark ({'quick' if args.quick else 'full'}), jax {jax.__version__} on {jax.default_backend()}, {os.cpu_count()} CPU cores"
-    )
-    rows_a = section_error_vs_time(cfg)
-    rows_b = section_throughput(cfg, args.seed)
-    summary = summarise(rows_a)
-    print("\nSUMMARY")
-    for key, entry in summary.items():
-        if key == "without reference":
-            print(f"  no reference (diffrax at rtol 1e-12 failed), not scored: {entry}")
-            continue
-        cases = ", ".join(
-            f"alpha {c['rate']:g} tau {c['tau']:g} "
-            + (f"rtol {c['rtol']:g}" if c["rtol"] else f"n {c['steps']}")
-            + (" (failed)" if c["failure"] else "")
-            for c in entry["unstable_cases"][:3]
-        )
-        finest = entry["finest"]
-        setting = f"rtol {finest['rtol']:g}" if finest["rtol"] else f"n {finest['steps']}"
-        print(
-            f"  {key:<40} worst error at {setting:<10} {entry['finest_worst_error']:9.2e}"
-            f" ({entry['finest_mean_time_s']:.1e} s); unstable or failed"
-            f" {entry['unstable']:>3} of {entry['histories']:<3} {cases}"
-        )
-    big = rows_b[-1]
-    print(
-        f"  throughput: {big['points']:.0e} points in {big['jax_s']:.3e} s ({big['jax_s'] / big['points'] * 1e9:.1f} ns/point), NumPy {big['numpy_s'] / big['jax_s']:.1f} x slower"
-    )
-    args.out.mkdir(parents=True, exist_ok=True)
-    data = {
-        "meta": {
-            **meta(args, load_start, sources, sources_changed(sources)),
-            "config": cfg,
-            "elapsed_s": time.perf_counter() - start,
-        },
-        "error_vs_time": rows_a,
-        "throughput": rows_b,
-        "summary": summary,
-    }
+    rows = error_vs_time(cfg)
+    summary = summarise(rows)
+    table("Accuracy against time: worst error over rates and relaxation times (max |dsigma| / sigma0)",
+          summary, [("law", "law", "s"), ("method", "method", "s"), ("setting", "setting", "s"),
+                    ("worst error", "worst_error", ".2e"), ("unstable / histories", "unstable", "d"),
+                    ("of", "histories", "d"), ("mean s / history", "mean_time_s", ".2e")])
+    missing = sorted({f"{r['law']} alpha {r['rate']:g} tau {r['tau']:g}" for r in rows if r["stable"] is None})
+    if missing:
+        print(f"no reference (diffrax at rtol 1e-12 failed), not scored: {missing}")
+    data = {"error_vs_time": rows, "summary": summary, "throughput": throughput(cfg, args.seed)}
+    table("SUMMARY: throughput of one backward-Euler Cowper-Symonds update with its tangent (D 40/s, q 5, "
+          "dt 1e-4 s), JAX (jit + vmap) against the same algorithm in NumPy", data["throughput"],
+          [("points", "points", "d"), ("JAX s", "jax_s", ".3e"), ("JAX ns / point", "jax_ns", ".1f"),
+           ("NumPy s", "numpy_s", ".3e"), ("NumPy ns / point", "numpy_ns", ".1f"), ("NumPy / JAX", "ratio", ".1f"),
+           ("stress difference / sigma0", "max_stress_difference", ".1e")])
+    data["first_call"] = first_calls(dict(list(FIRST_CASES.items())[: 1 if args.quick else None]))
     if not args.no_plots:
-        data["plots"] = [str(plot(args.out, rows_a))]
-    (args.out / "materials.json").write_text(json.dumps(data, indent=1))
-    print(f"wrote {args.out / 'materials.json'}")
+        plot(args, rows)
+    write_json(args, "materials", data, config=cfg)
 
 
 if __name__ == "__main__":
