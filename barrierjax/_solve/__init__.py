@@ -1,1 +1,2 @@
-"""Shared numerical kernels: quadrature rules and the phase-switching ODE driver."""
+"""Shared numerical kernels: quadrature rules, the phase-switching ODE driver (diffrax), the
+recorded step loop, Newton's method with its implicit derivative, and batching."""

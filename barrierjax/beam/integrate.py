@@ -36,6 +36,7 @@ Departures from the printed scheme, and why:
   report's alpha scheme (4.2.8)-(4.2.11), `material="implicit"` with backward Euler.
 """
 
+import functools
 from typing import Any
 
 import equinox as eqx
@@ -44,6 +45,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import check
+from .._solve.newton import newton
 from .layered import SCHEMES
 from .model import init_sections, internal_forces, load_average, mass_matrix, tangent_stiffness
 
@@ -84,6 +86,60 @@ def _solve_free(free, A, b):
     both = mask[:, None] & mask[None, :]
     A = jnp.where(both, A, jnp.eye(A.shape[0], dtype=A.dtype))
     return jnp.linalg.solve(A, jnp.where(mask, b, jnp.zeros_like(b)))
+
+
+class _StepParams(eqx.Module):
+    """What a step's equilibrium depends on: the model, the last converged state (u,
+    stress, state), the predictor `base`, the mass M, the load F and the step dt."""
+
+    model: Any
+    u: Any
+    base: Any
+    M: Any
+    F: Any
+    stress: Any
+    state: Any
+    dt: Any
+
+
+class _Equilibrium(eqx.Module):
+    """The equilibrium at the end of a step, r(u1) = M a(u1) + f_int(u1) - F on the free
+    dofs, with a(u1) = (u1 - base) / (beta dt^2), for `barrierjax._solve.newton`."""
+
+    free: tuple[bool, ...] = eqx.field(static=True)
+    beta: float = eqx.field(static=True)
+    tolerance: float = eqx.field(static=True)
+    material: str = eqx.field(static=True)
+    material_iterations: int = eqx.field(static=True)
+
+    def unbalanced(self, M, u1, base, f, F, scale):
+        """M a(u1) + f - F on the free dofs (zero on the fixed ones)."""
+        r = M @ ((u1 - base) * scale) + f - F
+        return jnp.where(jnp.asarray(self.free), r, jnp.zeros_like(r))
+
+    def relative(self, r, f, F):
+        """Newton's residual over the largest free internal force or load."""
+        size = jnp.max(jnp.abs(jnp.where(jnp.asarray(self.free), f, 0))) + jnp.max(jnp.abs(F))
+        return jnp.max(jnp.abs(r)) / (size + jnp.finfo(r.dtype).tiny)
+
+    def _forces(self, p: _StepParams, u1, tangent):
+        forces = tangent_stiffness if tangent else internal_forces
+        options = {"scheme": self.material, "iterations": self.material_iterations}
+        return forces(p.model, u1, p.u, p.stress, p.state, p.dt, **options)
+
+    def linearise(self, u1, p: _StepParams):
+        """The tangent K(u1) + M / (beta dt^2), the residual, and whether it converged."""
+        scale = 1 / (self.beta * p.dt**2)
+        K, f, _ = self._forces(p, u1, tangent=True)
+        r = self.unbalanced(p.M, u1, p.base, f, p.F, scale)
+        return K + p.M * scale, r, self.relative(r, f, p.F) <= self.tolerance
+
+    def residual(self, u1, p: _StepParams):
+        f, _ = self._forces(p, u1, tangent=False)
+        return self.unbalanced(p.M, u1, p.base, f, p.F, 1 / (self.beta * p.dt**2))
+
+    def merit(self, u1, p: _StepParams):
+        return jnp.sum(self.residual(u1, p) ** 2)
 
 
 def step_sizes(t_end, dt, *, pulse=None, pulse_steps=10):
@@ -170,6 +226,13 @@ def integrate(
     dtype = model.coords.dtype
     line_search = int(line_search)
     lengths = jnp.asarray(0.5 ** np.arange(max(line_search, 1)), dtype)
+    equilibrium = _Equilibrium(
+        free=tuple(bool(b) for b in free),
+        beta=beta,
+        tolerance=float(tolerance),
+        material=material,
+        material_iterations=int(material_iterations),
+    )
     kw = {"scheme": material, "iterations": material_iterations}
 
     def step(carry, dt):
@@ -180,63 +243,26 @@ def integrate(
         base = u + dt * v + dt**2 * (0.5 - beta) * a
         scale = 1 / (beta * dt**2)
 
-        def unbalanced(M, u1, base, f, F, scale):
-            """M a(u1) + f - F on the free dofs (zero on the fixed ones)."""
-            r = M @ ((u1 - base) * scale) + f - F
-            return jnp.where(jnp.asarray(free), r, jnp.zeros_like(r))
-
-        def relative(r, f):
-            """Newton's residual over the largest free internal force or load."""
-            size = jnp.max(jnp.abs(jnp.where(jnp.asarray(free), f, 0))) + jnp.max(jnp.abs(F))
-            return jnp.max(jnp.abs(r)) / (size + jnp.finfo(dtype).tiny)
-
-        frozen = jax.lax.stop_gradient((model, u, base, M, F, stress, state, dt))
-        mdl_s, u_s, base_s, M_s, F_s, stress_s, state_s, dt_s = frozen
-        scale_s = 1 / (beta * dt_s**2)
-
-        def jacobian(u1):
-            K, f, _ = tangent_stiffness(mdl_s, u1, u_s, stress_s, state_s, dt_s, **kw)
-            return K + M_s * scale_s, unbalanced(M_s, u1, base_s, f, F_s, scale_s), f
-
-        def residual_norm(u1):
-            f, _ = internal_forces(mdl_s, u1, u_s, stress_s, state_s, dt_s, **kw)
-            return jnp.sum(unbalanced(M_s, u1, base_s, f, F_s, scale_s) ** 2)
-
-        def newton(carry):
-            # Newton with a fixed-count line search: the step length of least residual among
-            # 1, 1/2, ..., 1/2^(line_search - 1) (a plastic hinge makes the tangent nearly
-            # singular, and full Newton steps can then diverge).
-            u1, _, count = carry
-            J, r, f = jacobian(u1)
-            converged = relative(r, f) <= tolerance
-            du = _solve_free(free, J, r)
-            if line_search <= 1:
-                step = du
-            else:
-                norms = jax.vmap(lambda s: residual_norm(u1 - s * du))(lengths)
-                norms = jnp.where(jnp.isfinite(norms), norms, jnp.inf)
-                step = lengths[jnp.argmin(norms)] * du
-            return jnp.where(converged, u1, u1 - step), converged, count + 1
-
         # Newton starts from the last converged state, as OpenSees does: a constant-
         # acceleration predictor overshoots (on Example 1's first step it puts the tip
         # element's fibres at yield where the converged step is elastic) and plain Newton
-        # then diverges. The iterations stop early once every member (under vmap) has
-        # converged: they carry no derivatives, so a while loop costs the gradient nothing.
-        u_star, _, _ = jax.lax.while_loop(
-            lambda c: ~c[1] & (c[2] < int(iterations)),
-            newton,
-            (u_s, jnp.asarray(False), 0),
+        # then diverges. A line search over `lengths` guards the iterations near a hinge.
+        u1 = newton(
+            equilibrium.linearise,
+            equilibrium.residual,
+            functools.partial(_solve_free, free),
+            u,
+            _StepParams(model, u, base, M, F, stress, state, dt),
+            iterations=int(iterations),
+            merit=equilibrium.merit,
+            step_lengths=lengths,
         )
-        J, _, _ = jacobian(u_star)
-        f_star, _ = internal_forces(model, u_star, u, stress, state, dt, **kw)
-        r = unbalanced(M, u_star, base, f_star, F, scale)
-        u1 = u_star - _solve_free(free, jax.lax.stop_gradient(J), r)
         f1, (stress1, state1, N, Mom, strains) = internal_forces(
             model, u1, u, stress, state, dt, **kw
         )
         a1 = (u1 - base) * scale
-        rel = jax.lax.stop_gradient(relative(unbalanced(M, u1, base, f1, F, scale), f1))
+        unbalanced = equilibrium.unbalanced(M, u1, base, f1, F, scale)
+        rel = jax.lax.stop_gradient(equilibrium.relative(unbalanced, f1, F))
         v1 = v + dt * ((1 - gamma) * a + gamma * a1)
         work = work + jnp.dot(u1 - u, F)
         carry = (t + dt, u1, v1, f1, stress1, state1, work)

@@ -3,10 +3,10 @@
 the positive root of p(S), its companions beta and gamma, and the exponents of (3.2.19)."""
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 
 from ..._custom_types import Scalar
+from ..._solve.newton import newton
 
 
 class Accelerative(eqx.Module):
@@ -35,30 +35,29 @@ def accelerative_phase(mu, phi) -> Accelerative:
     )
 
 
-@jax.custom_jvp
+def _cubic(s, mu):
+    """p(S) = S^3 + 3 mu S^2 - 3 S - 3 mu (3.2.17), whose positive root is alpha."""
+    return s**3 + 3.0 * mu * s**2 - 3.0 * s - 3.0 * mu
+
+
+def _cubic_linearised(s, mu):
+    return 3.0 * s**2 + 6.0 * mu * s - 3.0, _cubic(s, mu), jnp.asarray(False)
+
+
 def _largest_root(mu):
     """alpha: the positive root of p(S) = S^3 + 3 mu S^2 - 3 S - 3 mu, in [1, sqrt(3)].
 
     p is increasing and convex on [1, inf) and p(sqrt 3) = 6 mu >= 0, so Newton's method
     from sqrt(3) decreases monotonically onto alpha; eight steps reach rounding for every
-    mu >= 0. Differentiated implicitly, not through the iterations.
-    """
-
-    def newton(s, _):
-        p = s**3 + 3.0 * mu * s**2 - 3.0 * s - 3.0 * mu
-        dp = 3.0 * s**2 + 6.0 * mu * s - 3.0
-        return s - p / dp, None
-
-    start = jnp.full_like(mu, jnp.sqrt(3.0))
-    return jax.lax.scan(newton, start, None, length=8)[0]
-
-
-@_largest_root.defjvp
-def _largest_root_jvp(primals, tangents):
-    (mu,), (dmu,) = primals, tangents
-    alpha = _largest_root(mu)
-    # dp/dS dalpha + dp/dmu dmu = 0
-    return alpha, -(alpha**2 - 1.0) / (alpha**2 + 2.0 * mu * alpha - 1.0) * dmu
+    mu >= 0. Differentiated implicitly, not through the iterations (`_solve.newton`)."""
+    return newton(
+        _cubic_linearised,
+        _cubic,
+        lambda slope, p: p / slope,
+        jnp.full_like(mu, jnp.sqrt(3.0)),
+        mu,
+        iterations=7,
+    )
 
 
 class Decelerative(eqx.Module):
