@@ -192,7 +192,7 @@ def accuracy(cfg, mu, phi, speed, ref) -> list:
             for i in idx:
                 try:
                     results.append(scipy_solve(mu[i], phi[i], speed[i], method, rtol))
-                except RuntimeError:
+                except (RuntimeError, ValueError):  # ValueError: its event search failed
                     results.append(None)
             seconds = (time.perf_counter() - start) / len(idx)
             ok = [j for j, r in enumerate(results) if r is not None]
