@@ -55,11 +55,17 @@ def test_hinges_meet_at_rest_and_vehicle_leaves(oblique_batch):
     assert np.all(np.asarray(r.max_deflection) >= np.asarray(r.barrier_displacement))
 
 
-def _recorded_steps(mu, phi, vn, vh, rtol, max_steps=4096):
-    """The samples the step loop recorded for one scenario, and how many."""
-    loop = step_loop(jnp.asarray(rtol), max_steps)
-    solution = loop.solve(initial_carry(loop, *map(jnp.asarray, (mu, phi, vn, vh, 0.0)), history=True))
+@jax.jit
+def _recorded(mu, phi, vn, vh, rtol):
+    loop = step_loop(rtol, 4096)
+    solution = loop.solve(initial_carry(loop, mu, phi, vn, vh, 0.0 * mu, history=True))
     return solution.recording.samples, solution.recording.count
+
+
+def _recorded_steps(mu, phi, vn, vh, rtol):
+    """The samples the step loop recorded for one scenario, and how many (one compilation
+    serves every scenario)."""
+    return _recorded(*(jnp.asarray(x, float) for x in (mu, phi, vn, vh, rtol)))
 
 
 def test_max_deflection_is_the_peak_of_the_final_shape(oblique_batch):

@@ -16,11 +16,12 @@ from barrierjax.hinge.response import HISTORY_UNITS, RESULT_UNITS, kinetic_energ
 
 MU, PHI, SPEED = 2.0, 3.0, 0.8
 
+# n_history=200 throughout: `simulate` below then reuses these executables.
 MODELS = {
-    "normal, closed form": lambda: normal_impact(MU, PHI, SPEED, n_history=50),
-    "normal, ode": lambda: normal_impact(MU, PHI, SPEED, method="ode", n_history=50),
+    "normal, closed form": lambda: normal_impact(MU, PHI, SPEED, n_history=200),
+    "normal, ode": lambda: normal_impact(MU, PHI, SPEED, method="ode", n_history=200),
     # A string stage: N reaches N0 (the speed is high enough for eta0 = 0.3).
-    "axial": lambda: axial_impact(MU, PHI, 2.0, 0.3, n_history=50),
+    "axial": lambda: axial_impact(MU, PHI, 2.0, 0.3, n_history=200),
     "oblique": lambda: oblique_impact(MU, PHI, SPEED, 0.5, friction=0.2, rtol=1e-9, n_history=200),
 }
 SPEEDS = {
@@ -105,7 +106,8 @@ _SUFFIX = {"length": "_m", "time": "_s", "velocity": "_m_s", "energy": "_J", Non
 @pytest.mark.parametrize("kind", list(SCENES))
 def test_simulate_and_the_cli_json_use_the_shared_names(kind):
     scene = SCENES[kind]
-    result = bj.simulate(scene, n_history=20)
+    # (n_history=200: the oblique scene shares the executable of MODELS["oblique"].)
+    result = bj.simulate(scene, n_history=200)
     assert set(RESULT_UNITS) <= _names(result)
     assert _names(result.history) == set(HISTORY_UNITS)
     scales = result.groups.scales
