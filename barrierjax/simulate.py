@@ -118,25 +118,21 @@ def simulate(
         scene = _require_normal_angle(scene)
     groups = dimensionless(scene)
     inputs = (groups.mass_ratio, groups.force_ratio, groups.normal_speed)
+    tolerance = {} if rtol is None else {"rtol": rtol}
     if not normal:
         model = oblique_impact(
             *inputs,
             groups.tangential_speed,
             friction=groups.friction,
-            rtol=rtol,
             n_history=n_history,
             max_steps=max_steps,
+            **tolerance,
         )
     elif groups.axial_ratio is None:
-        rtol = _NORMAL_RTOL if rtol is None else rtol
-        model = normal_impact(*inputs, method=method, rtol=rtol, n_history=n_history)
+        model = normal_impact(*inputs, method=method, n_history=n_history, **tolerance)
     else:
-        rtol = _NORMAL_RTOL if rtol is None else rtol
-        model = axial_impact(*inputs, groups.axial_ratio, rtol=rtol, n_history=n_history)
+        model = axial_impact(*inputs, groups.axial_ratio, n_history=n_history, **tolerance)
     return _in_units(scene, groups, model)
-
-
-_NORMAL_RTOL = 1e-8
 
 
 def _scaled(units, scales, quantities):

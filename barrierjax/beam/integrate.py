@@ -122,7 +122,9 @@ class _Equilibrium(eqx.Module):
         size = jnp.max(jnp.abs(jnp.where(jnp.asarray(self.free), f, 0))) + jnp.max(jnp.abs(F))
         return jnp.max(jnp.abs(r)) / (size + jnp.finfo(r.dtype).tiny)
 
-    def _forces(self, p: _StepParams, u1, tangent):
+    def forces(self, p: _StepParams, u1, tangent=False):
+        """The internal forces at u1 (with the tangent stiffness: `tangent`), stepping the
+        material from the last converged state."""
         forces = tangent_stiffness if tangent else internal_forces
         options = {"scheme": self.material, "iterations": self.material_iterations}
         return forces(p.model, u1, p.u, p.stress, p.state, p.dt, **options)
@@ -130,12 +132,12 @@ class _Equilibrium(eqx.Module):
     def linearise(self, u1, p: _StepParams):
         """The tangent K(u1) + M / (beta dt^2), the residual, and whether it converged."""
         scale = 1 / (self.beta * p.dt**2)
-        K, f, _ = self._forces(p, u1, tangent=True)
+        K, f, _ = self.forces(p, u1, tangent=True)
         r = self.unbalanced(p.M, u1, p.base, f, p.F, scale)
         return K + p.M * scale, r, self.relative(r, f, p.F) <= self.tolerance
 
     def residual(self, u1, p: _StepParams):
-        f, _ = self._forces(p, u1, tangent=False)
+        f, _ = self.forces(p, u1)
         return self.unbalanced(p.M, u1, p.base, f, p.F, 1 / (self.beta * p.dt**2))
 
     def merit(self, u1, p: _StepParams):
@@ -233,7 +235,6 @@ def integrate(
         material=material,
         material_iterations=int(material_iterations),
     )
-    kw = {"scheme": material, "iterations": material_iterations}
 
     def step(carry, dt):
         t, u, v, f_int, stress, state, work = carry
@@ -247,19 +248,18 @@ def integrate(
         # acceleration predictor overshoots (on Example 1's first step it puts the tip
         # element's fibres at yield where the converged step is elastic) and plain Newton
         # then diverges. A line search over `lengths` guards the iterations near a hinge.
+        params = _StepParams(model, u, base, M, F, stress, state, dt)
         u1 = newton(
             equilibrium.linearise,
             equilibrium.residual,
             functools.partial(_solve_free, free),
             u,
-            _StepParams(model, u, base, M, F, stress, state, dt),
+            params,
             iterations=int(iterations),
             merit=equilibrium.merit,
             step_lengths=lengths,
         )
-        f1, (stress1, state1, N, Mom, strains) = internal_forces(
-            model, u1, u, stress, state, dt, **kw
-        )
+        f1, (stress1, state1, N, Mom, strains) = equilibrium.forces(params, u1)
         a1 = (u1 - base) * scale
         unbalanced = equilibrium.unbalanced(M, u1, base, f1, F, scale)
         rel = jax.lax.stop_gradient(equilibrium.relative(unbalanced, f1, F))

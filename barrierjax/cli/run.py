@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from ..hinge.oblique import ObliqueImpact
-from ..hinge.response import RESULT_UNITS
+from ..hinge.response import RESULT_UNITS, kinetic_energy_balance
 from .cantilever import cantilever_number, run_cantilever
 from .output import EXIT_FAILED, CommandError, as_float, print_result, progress, progress_after
 
@@ -72,9 +72,7 @@ def result_dict(scene, result, name: str = "") -> dict:
         "kinetic_energy_J": as_float(result.kinetic_energy),
         "exit_kinetic_energy_J": as_float(0.5 * scene.vehicle.mass * result.exit_speed**2),
         "energy_balance_error_J": as_float(
-            sum(getattr(result, name) for name in RESULT_UNITS if name.endswith("_work"))
-            + 0.5 * scene.vehicle.mass * result.exit_speed**2
-            - result.kinetic_energy
+            -kinetic_energy_balance(result, scene.vehicle.mass, scene.impact.speed)
         ),
     }
 

@@ -106,8 +106,10 @@ def exit_angle_deg(normal, tangential):
 
 def kinetic_energy_balance(result, mass_ratio, normal_speed, tangential_speed=0.0):
     """The vehicle's initial kinetic energy mu (V_N^2 + V_H^2) / 2 less what the result
-    says it went into (every work term, and the kinetic energy it leaves with),
-    dimensionless: zero to the model's accuracy. The barrier is at rest at the end."""
+    says it went into (every work term, and the kinetic energy it leaves with): zero to
+    the model's accuracy. Dimensionless for a model's result; for `barrierjax.Result`,
+    pass the vehicle's mass and impact speed and it is in the scene's units. The barrier
+    is at rest at the end."""
     initial = 0.5 * mass_ratio * (normal_speed**2 + tangential_speed**2)
     spent = sum(getattr(result, name) for name in RESULT_UNITS if name.endswith("_work"))
     return initial - spent - 0.5 * mass_ratio * result.exit_speed**2
