@@ -120,3 +120,24 @@ def test_simulate_and_the_cli_json_use_the_shared_names(kind):
     for field, unit in RESULT_UNITS.items():
         assert data[field + _SUFFIX[unit]] == pytest.approx(float(getattr(result, field)), rel=1e-12)
     assert abs(data["energy_balance_error_J"]) < 1e-4 * data["kinetic_energy_J"]
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda n: normal_impact(MU, PHI, SPEED, n_history=n),
+        lambda n: axial_impact(MU, PHI, SPEED, 0.3, n_history=n),
+        lambda n: oblique_impact(MU, PHI, SPEED, 0.5, n_history=n),
+    ],
+)
+@pytest.mark.parametrize("n_history", [1, -2, 2.5])
+def test_the_history_keyword_is_checked_alike(call, n_history):
+    with pytest.raises(ValueError, match="n_history must be 0 or an integer >= 2"):
+        call(n_history)
+
+
+def test_moving_load_needs_a_history():
+    from barrierjax.hinge import moving_load
+
+    with pytest.raises(ValueError, match="n_history must be an integer >= 2"):
+        moving_load(2.0, 1.0, 10.0, n_history=0)
