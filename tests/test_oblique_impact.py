@@ -202,7 +202,14 @@ def test_batched_gradient_equals_the_loop_of_scalar_gradients():
         # (Unpacked from an array, as the finite-difference tests below pass them: they
         # then share the scalar gradient's compilation.)
         loop = np.array(gradient(*jnp.array(case)))
-        np.testing.assert_allclose(row, loop, rtol=1e-8, atol=1e-12 * np.max(np.abs(loop)))
+        np.testing.assert_allclose(row, loop, rtol=_GRADIENT_ROUNDING, atol=1e-12 * np.max(np.abs(loop)))
+
+
+# The rounding floor of these gradients at rtol 1e-11: moving the mass ratio of the last
+# case by one ulp (1 + 1e-15) moves its scalar gradient by 9e-9 relative (and by 2.4e-8 at
+# 1 + 1e-13), though the forward moves by 4e-14; the batched and scalar gradients add up
+# the same tangents in different orders, and differ by as much (2.2e-8).
+_GRADIENT_ROUNDING = 5e-8
 
 
 def _jacobian_against_finite_differences(

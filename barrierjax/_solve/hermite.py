@@ -1,27 +1,48 @@
 """Quintic Hermite interpolation on one interval."""
 
+import numpy as np
 
-def _left_weights(u):
-    """The weights of the left end's value, slope and second derivative, and their first
-    and second u-derivatives."""
-    u2, u3, u4, u5 = u * u, u**3, u**4, u**5
-    return (
-        (
-            1 - 10 * u3 + 15 * u4 - 6 * u5,
-            u - 6 * u3 + 8 * u4 - 3 * u5,
-            0.5 * (u2 - 3 * u3 + 3 * u4 - u5),
-        ),
-        (
-            -30 * u2 + 60 * u3 - 30 * u4,
-            1 - 18 * u2 + 32 * u3 - 15 * u4,
-            0.5 * (2 * u - 9 * u2 + 12 * u3 - 5 * u4),
-        ),
-        (
-            -60 * u + 180 * u2 - 120 * u3,
-            -36 * u + 96 * u2 - 60 * u3,
-            0.5 * (2 - 18 * u + 36 * u2 - 20 * u3),
-        ),
-    )
+# The quintic on [0, 1] through (value, slope, second derivative) at both ends, in powers
+# of u: row k gives u^k's coefficient from (p0, s0, k0, p1, s1, k1), the derivatives
+# taken in u (the callers' derivatives in x times the width, and its square).
+_POWERS = np.array(
+    [
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
+        [-10.0, -6.0, -1.5, 10.0, -4.0, 0.5],
+        [15.0, 8.0, 1.5, -15.0, 7.0, -1.0],
+        [-6.0, -3.0, -0.5, 6.0, -3.0, 0.5],
+    ]
+)
+
+
+class Quintic:
+    """The quintic Hermite interpolant on an interval of `width` through (value, slope,
+    second derivative) at both ends, the derivatives in x = u width; the data may be
+    arrays of one shape (one interpolant each). Its powers of u are formed once, so that
+    evaluating it is Horner's rule: a few multiply-adds, where the ends' weights (15
+    polynomials in u) would be formed at every evaluation."""
+
+    def __init__(self, width, left, right):
+        (p0, s0, k0), (p1, s1, k1) = left, right
+        data = (p0, width * s0, width**2 * k0, p1, width * s1, width**2 * k1)
+        self.width = width
+        # (Written out term by term, not one product with a stacked array: under `vmap`
+        # a stack puts each lane's six numbers side by side, and every later operation on
+        # one of them then reads a strided column.)
+        self.powers = tuple(
+            sum(float(m) * d for m, d in zip(row, data) if m != 0.0) for row in _POWERS
+        )
+
+    def __call__(self, u):
+        """Value, slope and second derivative in x at the fraction `u` of the interval."""
+        value, slope, half_second = self.powers[5], 0.0, 0.0
+        for power in self.powers[4::-1]:
+            half_second = half_second * u + slope
+            slope = slope * u + value
+            value = value * u + power
+        return value, slope / self.width, 2.0 * half_second / self.width**2
 
 
 def quintic_hermite(u, width, left, right):
@@ -29,16 +50,4 @@ def quintic_hermite(u, width, left, right):
     derivatives in x = u width: its value, slope and second derivative in x at u.
 
     Exact on quintics; error O(width^6) on smooth functions."""
-    # The right end's weights are the left end's at 1 - u, with the odd derivatives negated.
-    weights, weights_right = _left_weights(u), _left_weights(1.0 - u)
-    (p0, s0, k0), (p1, s1, k1) = left, right
-    scale = (1.0, width, width * width)
-    out = []
-    for order, (b, c) in enumerate(zip(weights, weights_right)):
-        sign = -1.0 if order % 2 else 1.0
-        combined = sum(
-            bi * d * si + sign * ci * e * si * (-1.0) ** i
-            for i, (bi, ci, d, e, si) in enumerate(zip(b, c, (p0, s0, k0), (p1, s1, k1), scale))
-        )
-        out.append(combined / width**order)
-    return tuple(out)
+    return Quintic(width, left, right)(u)

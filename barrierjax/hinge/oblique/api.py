@@ -175,7 +175,7 @@ _LANES, _REFILL = 384, 48
 def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
     def solve(*inputs_and_rtol):
         *inputs, rtol = inputs_and_rtol
-        loop = step_loop(rtol, max_steps)
+        loop = step_loop(rtol, max_steps, batched=mu.ndim > 0)
         start = lambda x: initial_carry(loop, *x, history=n_history > 0)
         results = functools.partial(finish, n_history=n_history, n_x=n_x)
         if mu.ndim == 0:

@@ -188,7 +188,9 @@ def max_step(y: State, f: State, stage: Stage, past: Past, p: Params):
 _PAST_BREAKPOINT = 1.01
 
 
-def step_loop(rtol, max_steps) -> RecordedRK:
+def step_loop(rtol, max_steps, *, batched=False) -> RecordedRK:
+    """The step loop; `batched` for one that runs many scenarios side by side (its steps
+    written out: longer to compile, faster to run)."""
     return RecordedRK(
         field=vector_field,
         record=record,
@@ -199,6 +201,7 @@ def step_loop(rtol, max_steps) -> RecordedRK:
         rtol=rtol,
         atol=1e-3 * rtol,
         max_steps=max_steps,
+        batched=batched,
     )
 
 
