@@ -128,6 +128,7 @@ def scales(barrier: Barrier) -> Scales:
     )
 
 
+@eqx.filter_jit
 def dimensionless(scene: Scene) -> Dimensionless:
     """The report's groups of `scene`: mass ratio mu = M/(m L), force ratio phi = P0/P_b,
     the normal and tangential impact speeds over L/t0, the axial ratio eta0 = N0/P_b

@@ -143,6 +143,9 @@ def _scaled(units, scales, quantities):
     }
 
 
+# (One compiled function, not a dozen small ones: each eager operation is an executable
+# of its own, to compile or to load from the persistent cache, in every new process.)
+@eqx.filter_jit
 def _in_units(scene, groups, model) -> Result:
     """The `Result` of a model's dimensionless result: its shared fields scaled, and what
     the scene alone fixes."""

@@ -1,8 +1,13 @@
 import jax
 import pytest
 
+from barrierjax import compilation_cache
+
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
+# The persistent compilation cache (BARRIERJAX_CACHE_DIR=off to run without): the workers
+# share what each compiles, and a second run of the suite compiles almost nothing.
+compilation_cache.enable()
 
 
 def _jax_arrays_in(expected):

@@ -24,6 +24,11 @@ One module per command: `run` (and the scene summary, `result_dict`, `format_sum
 `cantilever` (`run cantilever-N`), `figures`, `optimize`; `output` holds what they share
 (`CommandError`, exit statuses, progress messages, double precision, printing results).
 This package holds the parser and `main`.
+
+Every command keeps what it compiles in JAX's persistent compilation cache
+(`barrierjax.compilation_cache`: under the user's cache folder, `BARRIERJAX_CACHE_DIR` to
+move it, `BARRIERJAX_CACHE_DIR=off` to go without), so that its second run loads the
+models instead of compiling them.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .. import compilation_cache
 from .cantilever import (
     CANTILEVER,
     CANTILEVER_OPTIONS,
@@ -175,6 +181,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     enable_x64()
+    compilation_cache.enable()
     from ..scene_file import SceneFileError
 
     try:

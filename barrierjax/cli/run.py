@@ -7,6 +7,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import jax
+import numpy as np
+
 from ..hinge.oblique import ObliqueImpact
 from ..hinge.response import RESULT_UNITS, kinetic_energy_balance
 from .cantilever import cantilever_number, run_cantilever
@@ -34,6 +37,8 @@ def result_dict(scene, result, name: str = "") -> dict:
     its name with its unit appended (`damage_m`, `duration_s`, `exit_speed_m_s`,
     `crush_work_J`, `exit_angle_deg`), and what the scene alone fixes
     (`peak_deceleration_g`, `kinetic_energy_J`, the energy balance's error)."""
+    # (In numpy: each eager JAX operation would be an executable of its own to compile.)
+    scene, result = jax.tree.map(np.asarray, (scene, result))
     barrier, vehicle, impact = scene.barrier, scene.vehicle, scene.impact
     groups, scales = result.groups, result.groups.scales
     deceleration = as_float(result.peak_deceleration)
