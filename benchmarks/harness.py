@@ -75,7 +75,13 @@ try:  # ru_maxrss carries the parent's resident size at fork over exec; VmHWM st
     _peak = [int(x.split()[1]) / 1024 for x in open("/proc/self/status") if x.startswith("VmHWM:")][0]
 except (OSError, IndexError):
     pass
-print("FIRST_CALL " + json.dumps(dict(import_s=_t1 - _t0, first_call_s=_t2 - _t1, peak_rss_mb=_peak)))
+_steady = []
+for _ in range({steady_reps}):
+    _t = time.perf_counter()
+    jax.block_until_ready({call})
+    _steady.append(time.perf_counter() - _t)
+print("FIRST_CALL " + json.dumps(dict(import_s=_t1 - _t0, first_call_s=_t2 - _t1, peak_rss_mb=_peak,
+                                      steady_s=min(_steady) if _steady else None)))
 """
 
 
@@ -89,11 +95,20 @@ def _rss_mb(pid: int) -> float:
     return 0.0
 
 
-def first_call(setup: str, call: str, *, x64=True, timeout=600.0, rss_limit_gb=None) -> dict:
+def first_call(
+    setup: str, call: str, *, x64=True, timeout=600.0, rss_limit_gb=None, steady_reps=0,
+    package=None,
+) -> dict:
     """Run `setup` (imports and inputs: timed as `import_s`) then the expression `call`
     (waited for: `first_call_s`) in a fresh `sys.executable` with `JAX_ENABLE_X64` set to
-    `x64`. The child is killed after `timeout` s or above `rss_limit_gb` resident."""
-    code = _CHILD.format(here=str(HERE), setup=textwrap.dedent(setup).strip(), call=call)
+    `x64`, and then `steady_reps` more times (the best: `steady_s`). The child is killed
+    after `timeout` s or above `rss_limit_gb` resident. `package`: a folder holding another
+    checkout's `barrierjax`, imported in its place (to measure a commit against another)."""
+    code = _CHILD.format(
+        here=str(HERE), setup=textwrap.dedent(setup).strip(), call=call, steady_reps=steady_reps
+    )
+    if package is not None:
+        code = f"import sys; sys.path.insert(0, {str(package)!r})\n" + code
     env = dict(os.environ, JAX_ENABLE_X64="1" if x64 else "0")
     start = time.perf_counter()
     child = subprocess.Popen(

@@ -28,32 +28,44 @@ def newton(
     params,
     *,
     iterations: int,
-    merit: Callable[[Any, Any], Any] | None = None,
-    step_lengths=(1.0,),
+    halvings: int = 0,
 ):
     """The root x of `residual(x, params) = 0` from `x0`, differentiable in `params`.
 
     - `linearise(x, params)`: (J, r, converged), the Jacobian and residual at x and whether
       x is converged (a boolean scalar; the iterations stop once it holds);
-    - `residual(x, params)`: r alone, for the final step on the live parameters;
+    - `residual(x, params)`: r alone, for the line search and the final step on the live
+      parameters;
     - `solve(J, r)`: the Newton step J^-1 r;
     - `iterations`: the budget of iterations before the final step (0: the final step
       alone, from `x0`, a single linearised solve);
-    - `merit`, `step_lengths`: with more than one length, a line search takes the step
-      length of least `merit(x - length * step, params)` among `step_lengths` (a nearly
-      singular Jacobian, as at a plastic hinge, makes full Newton steps diverge).
+    - `halvings`: a backtracking line search (a nearly singular Jacobian, as at a plastic
+      hinge, makes full Newton steps diverge): the full step first, halved while it does
+      not lower the residual's sum of squares, at most `halvings` times. Where the full
+      step is good, as in most iterations, it costs one residual.
     """
     frozen = jax.lax.stop_gradient(params)
-    lengths = jnp.asarray(step_lengths)
+
+    def line_search(x, r, step):
+        current = jnp.sum(r**2)
+        merit = lambda length: jnp.sum(residual(x - length * step, frozen) ** 2)
+
+        def halve(search):
+            length, _, count = search
+            return 0.5 * length, merit(0.5 * length), count + 1
+
+        # (A NaN merit is not below the current one: it is halved too.)
+        no_better = lambda search: ~(search[1] < current) & (search[2] < halvings)
+        one = jnp.ones((), r.dtype)
+        length, _, _ = jax.lax.while_loop(no_better, halve, (one, merit(one), 0))
+        return length * step
 
     def iterate(carry):
         x, _, count = carry
         J, r, converged = linearise(x, frozen)
         step = solve(J, r)
-        if merit is not None and lengths.size > 1:
-            merits = jax.vmap(lambda length: merit(x - length * step, frozen))(lengths)
-            merits = jnp.where(jnp.isfinite(merits), merits, jnp.inf)
-            step = lengths[jnp.argmin(merits)] * step
+        if halvings > 0:
+            step = line_search(x, r, step)
         return jnp.where(converged, x, x - step), converged, count + 1
 
     x_star, _, _ = jax.lax.while_loop(

@@ -140,9 +140,6 @@ class _Equilibrium(eqx.Module):
         f, _ = self.forces(p, u1)
         return self.unbalanced(p.M, u1, p.base, f, p.F, 1 / (self.beta * p.dt**2))
 
-    def merit(self, u1, p: _StepParams):
-        return jnp.sum(self.residual(u1, p) ** 2)
-
 
 def step_sizes(t_end, dt, *, pulse=None, pulse_steps=10):
     """Step sizes (numpy, static length): `pulse_steps` equal steps over [0, pulse] (the
@@ -194,7 +191,8 @@ def integrate(
     only one stable at the report's steps). `beta`, `gamma` override the scheme's. Newton:
     up to `iterations` on stopped gradients (ending early once the relative residual
     max|r| / (max|f_int| + max|F|) is at most `tolerance`) plus one with gradients, each with
-    a line search over `line_search` step lengths (1 = plain Newton); `substeps` equal
+    a backtracking line search over up to `line_search` step lengths, the full step first
+    and halved while the residual does not fall (1 = plain Newton); `substeps` equal
     sub-steps per step (the
     history keeps the end of each step): full Newton on backward-Euler Cowper-Symonds fibres
     diverges from the predictor when a step moves a hinge far into the viscoplastic range
@@ -227,7 +225,6 @@ def integrate(
     free = model.free()
     dtype = model.coords.dtype
     line_search = int(line_search)
-    lengths = jnp.asarray(0.5 ** np.arange(max(line_search, 1)), dtype)
     equilibrium = _Equilibrium(
         free=tuple(bool(b) for b in free),
         beta=beta,
@@ -247,7 +244,7 @@ def integrate(
         # Newton starts from the last converged state, as OpenSees does: a constant-
         # acceleration predictor overshoots (on Example 1's first step it puts the tip
         # element's fibres at yield where the converged step is elastic) and plain Newton
-        # then diverges. A line search over `lengths` guards the iterations near a hinge.
+        # then diverges. A line search guards the iterations near a hinge.
         params = _StepParams(model, u, base, M, F, stress, state, dt)
         u1 = newton(
             equilibrium.linearise,
@@ -256,8 +253,7 @@ def integrate(
             u,
             params,
             iterations=int(iterations),
-            merit=equilibrium.merit,
-            step_lengths=lengths,
+            halvings=max(line_search, 1) - 1,
         )
         f1, (stress1, state1, N, Mom, strains) = equilibrium.forces(params, u1)
         a1 = (u1 - base) * scale
