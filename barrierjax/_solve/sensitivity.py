@@ -14,7 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 
 
-def forward_jacobian_jvp(fn, n_differentiable=None):
+def forward_jacobian_jvp(fn, n_differentiable=None, differentiated=None):
     """`fn(*scalars) -> PyTree` with a custom JVP built from its forward Jacobian.
 
     For scalars the primal is computed once, alongside all the directional derivatives (a
@@ -33,7 +33,11 @@ def forward_jacobian_jvp(fn, n_differentiable=None):
 
     Only the first `n_differentiable` arguments (default: all) are differentiated; the
     rest (tolerances, traced so that changing them does not recompile) get no derivative.
+    `differentiated` (default `fn`): the same function, written otherwise, whose forward
+    Jacobian is taken, and which also gives the primal where one is differentiated (for
+    example written to compile fast, where `fn` is written to run fast).
     """
+    differentiated = fn if differentiated is None else differentiated
 
     @jax.custom_jvp
     def wrapped(*params):
@@ -48,11 +52,11 @@ def forward_jacobian_jvp(fn, n_differentiable=None):
 
             def along(direction):
                 per_problem = tuple(d * jnp.ones_like(x) for d, x in zip(direction, inputs))
-                return jax.jvp(lambda *x: fn(*x, *fixed), inputs, per_problem)
+                return jax.jvp(lambda *x: differentiated(*x, *fixed), inputs, per_problem)
 
             out, jacobian = jax.vmap(along, out_axes=(None, 0))(basis)
         else:
-            out, jacobian = _directions_as_problems(fn, inputs, fixed, basis)
+            out, jacobian = _directions_as_problems(differentiated, inputs, fixed, basis)
         tangent = jnp.stack(tangents[:n])
 
         def along_tangent(j, o):
