@@ -179,8 +179,8 @@ def _locate(event, start, end, e_start, e_end, length):
     is found on its own by Newton's method safeguarded by bisection (the interpolant's
     derivatives are exact), from the secant through the step's ends; then one Newton
     correction of the first, whose slope carries no derivative: the fraction's
-    derivative is the implicit function theorem's. The interpolant is formed once, and each
-    term's iteration evaluates only the entries of it that the term reads."""
+    derivative is the implicit function theorem's. The interpolant is formed once per
+    step; its evaluations are Horner's rule."""
     at = _interpolant(start, end, length)
     terms_at = lambda u: event(*at(u)[:2])
     crossing = e_end <= 0.0
