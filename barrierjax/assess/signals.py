@@ -1,0 +1,134 @@
+"""A sampled record as a function of time: the piecewise-linear interpolant of uniformly
+spaced samples, its exact first and second integrals, and values between the samples.
+
+The occupant-risk models integrate the vehicle's acceleration once for the occupant's
+velocity relative to the vehicle and twice for its displacement. Taking the acceleration
+linear between samples makes the velocity piecewise quadratic and the displacement piecewise
+cubic, so that a cubic Hermite interpolant through the samples of the displacement and its
+slope (the velocity) is the displacement exactly, and a crossing time found on it is exact for
+the sampled record. Outside the record the acceleration is zero: before it the vehicle is
+unaccelerated, after it the vehicle moves on freely (a model's history ends at rest or at exit).
+Functions take one record (1-D arrays); `jax.vmap` batches them.
+"""
+
+import jax
+import jax.numpy as jnp
+
+__all__ = [
+    "cumulative_integrals",
+    "first_crossing",
+    "hermite_at",
+    "integral_at",
+    "max_window_mean",
+    "safe_norm",
+]
+
+
+def cumulative_integrals(a, dt):
+    """(v, d): the integrals of the piecewise-linear `a` from the first sample to each
+    sample, once (trapezoids) and twice (exact for the linear pieces)."""
+    v_steps = 0.5 * dt * (a[1:] + a[:-1])
+    v = jnp.concatenate([jnp.zeros_like(a[:1]), jnp.cumsum(v_steps)])
+    d_steps = dt * v[:-1] + dt**2 * (2.0 * a[:-1] + a[1:]) / 6.0
+    d = jnp.concatenate([jnp.zeros_like(a[:1]), jnp.cumsum(d_steps)])
+    return v, d
+
+
+def _interval(tau, dt, n: int):
+    """The sample interval [i, i + 1] that holds `tau` (s from the first sample; clipped to
+    the record) and the offset into it, clipped to [0, dt]."""
+    i = jnp.clip(jnp.floor(jax.lax.stop_gradient(tau) / dt).astype(int), 0, n - 2)
+    return i, jnp.clip(tau - i * dt, 0.0, dt)
+
+
+def integral_at(a, dt):
+    """The function tau -> integral of `a` from the first sample to `tau` (s after it), with
+    a = 0 outside the record. Differentiable in `a` and `tau`."""
+    v, _ = cumulative_integrals(a, dt)
+
+    def integral(tau):
+        i, s = _interval(tau, dt, a.shape[0])
+        inside = v[i] + a[i] * s + 0.5 * (a[i + 1] - a[i]) * s**2 / dt
+        return jnp.where(tau <= 0.0, 0.0, inside)
+
+    return integral
+
+
+def hermite_at(position, velocity, dt):
+    """The function tau -> (position, velocity) of the cubic Hermite interpolant of samples
+    `position` with slopes `velocity` (s after the first sample; axis 0 is time, trailing
+    axes are components), continued in a straight line at the last velocity after the
+    record."""
+    n = position.shape[0]
+
+    def at(tau):
+        i, s = _interval(tau, dt, n)
+        u = s / dt
+        p0, p1, v0, v1 = position[i], position[i + 1], dt * velocity[i], dt * velocity[i + 1]
+        h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
+        dh00, dh10, dh01, dh11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, 3 * u**2 - 2 * u
+        p = h00 * p0 + h10 * v0 + h01 * p1 + h11 * v1
+        dp = (dh00 * p0 + dh10 * v0 + dh01 * p1 + dh11 * v1) / dt
+        beyond = jnp.maximum(tau - (n - 1) * dt, 0.0)
+        return p + beyond * velocity[-1], dp
+
+    return at
+
+
+def first_crossing(position, velocity, limit, dt, newton_steps: int = 6):
+    """When the 1-D path (`position` samples, slopes `velocity`, on `hermite_at`'s
+    interpolant) first reaches |position| = `limit`: (time from the first sample, whether
+    within the record). Past the record the path runs on straight; a path that never
+    reaches the limit gives +inf.
+
+    The crossing's sample interval is found by comparison (piecewise constant), the time
+    in it by Newton's method on the interpolant; the last Newton step is taken with the
+    gradient, so that d(time)/d(input) = -d(residual)/d(input) / d(residual)/d(time),
+    exact by the implicit function theorem (a sample index would give zero)."""
+    n = position.shape[0]
+    path = hermite_at(position, velocity, dt)
+    reached = jnp.abs(position) >= limit
+    k = jnp.argmax(reached)
+    in_record = reached[k]
+    end = (n - 1) * dt
+    # In the record: between samples k - 1 and k, from the chord; past it: on the line.
+    sign = jnp.where(in_record, jnp.sign(position[k]), jnp.sign(velocity[-1]))
+    p0, p1 = position[jnp.maximum(k - 1, 0)], position[k]
+    chord = (jnp.maximum(k - 1, 0) + (sign * limit - p0) / jnp.where(p1 == p0, 1.0, p1 - p0)) * dt
+    moving_out = sign * velocity[-1] > 0.0
+    line = end + (sign * limit - position[-1]) / jnp.where(moving_out, velocity[-1], 1.0)
+    never = ~in_record & ~moving_out
+    lower = jnp.where(in_record, jnp.maximum(k - 1, 0) * dt, end)
+    upper = jnp.where(in_record, k * dt, jnp.inf)
+    guess = jnp.where(in_record, chord, jnp.where(never, end, line))
+
+    def newton(tau):
+        p, v = path(tau)
+        step = (sign * p - limit) / jnp.where(v == 0.0, 1.0, sign * v)
+        return tau - step
+
+    tau = jax.lax.stop_gradient(guess)
+    for _ in range(newton_steps):
+        tau = jnp.clip(jax.lax.stop_gradient(newton(tau)), lower, jnp.minimum(upper, 1e30))
+    tau = newton(tau)
+    return jnp.where(never, jnp.inf, tau), in_record
+
+
+def max_window_mean(a, dt, window: float, t_from):
+    """The largest |mean| of the piecewise-linear `a` over `window` seconds among the
+    windows that start at `t_from` or at a later sample (a = 0 past the record); 0 when
+    `t_from` is +inf. The mean over a window starting at `t_from` makes it continuous and
+    differentiable in `t_from`."""
+    integral = integral_at(a, dt)
+    finite_from = jnp.where(jnp.isfinite(t_from), t_from, 0.0)
+    starts = jnp.concatenate([jnp.arange(a.shape[0]) * dt, finite_from[None]])
+    means = jnp.abs(integral(starts + window) - integral(starts)) / window
+    after = (starts >= finite_from) & jnp.isfinite(t_from)
+    return jnp.max(jnp.where(after, means, 0.0))
+
+
+def safe_norm(x, axis=-1):
+    """The Euclidean norm along `axis`, with a zero (not NaN) gradient at zero."""
+    squares = jnp.sum(x**2, axis=axis)
+    positive = squares > 0.0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, squares, 1.0)), 0.0)
