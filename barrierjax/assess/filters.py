@@ -141,7 +141,7 @@ def moving_average(x, dt, window: float):
     the record: EN 1317-1:1998's 50 ms average of the ASI. Exact integrals."""
 
     def one(x):
-        t = jnp.arange(x.shape[-1]) * dt
+        t = jnp.arange(x.shape[-1], dtype=x.dtype) * dt
         integral = signals.integral_at(x, dt)
         return (integral(t + 0.5 * window) - integral(t - 0.5 * window)) / window
 

@@ -38,7 +38,7 @@ def _interval(tau, dt, n: int):
     """The sample interval [i, i + 1] that holds `tau` (s from the first sample; clipped to
     the record) and the offset into it, clipped to [0, dt]."""
     i = jnp.clip(jnp.floor(jax.lax.stop_gradient(tau) / dt).astype(int), 0, n - 2)
-    return i, jnp.clip(tau - i * dt, 0.0, dt)
+    return i, jnp.clip(tau - i.astype(tau.dtype) * dt, 0.0, dt)
 
 
 def integral_at(a, dt):
@@ -90,16 +90,18 @@ def first_crossing(position, velocity, limit, dt, newton_steps: int = 6):
     reached = jnp.abs(position) >= limit
     k = jnp.argmax(reached)
     in_record = reached[k]
+    previous = jnp.maximum(k - 1, 0)
+    k_time, previous_time = k.astype(position.dtype) * dt, previous.astype(position.dtype) * dt
     end = (n - 1) * dt
     # In the record: between samples k - 1 and k, from the chord; past it: on the line.
     sign = jnp.where(in_record, jnp.sign(position[k]), jnp.sign(velocity[-1]))
-    p0, p1 = position[jnp.maximum(k - 1, 0)], position[k]
-    chord = (jnp.maximum(k - 1, 0) + (sign * limit - p0) / jnp.where(p1 == p0, 1.0, p1 - p0)) * dt
+    p0, p1 = position[previous], position[k]
+    chord = previous_time + (sign * limit - p0) / jnp.where(p1 == p0, 1.0, p1 - p0) * dt
     moving_out = sign * velocity[-1] > 0.0
     line = end + (sign * limit - position[-1]) / jnp.where(moving_out, velocity[-1], 1.0)
     never = ~in_record & ~moving_out
-    lower = jnp.where(in_record, jnp.maximum(k - 1, 0) * dt, end)
-    upper = jnp.where(in_record, k * dt, jnp.inf)
+    lower = jnp.where(in_record, previous_time, end)
+    upper = jnp.where(in_record, k_time, jnp.inf)
     guess = jnp.where(in_record, chord, jnp.where(never, end, line))
 
     def newton(tau):
@@ -121,7 +123,7 @@ def max_window_mean(a, dt, window: float, t_from):
     differentiable in `t_from`."""
     integral = integral_at(a, dt)
     finite_from = jnp.where(jnp.isfinite(t_from), t_from, 0.0)
-    starts = jnp.concatenate([jnp.arange(a.shape[0]) * dt, finite_from[None]])
+    starts = jnp.concatenate([jnp.arange(a.shape[0], dtype=a.dtype) * dt, finite_from[None]])
     means = jnp.abs(integral(starts + window) - integral(starts)) / window
     after = (starts >= finite_from) & jnp.isfinite(t_from)
     return jnp.max(jnp.where(after, means, 0.0))

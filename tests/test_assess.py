@@ -1,0 +1,212 @@
+"""barrierjax.assess: the occupant-risk metrics and filters against closed forms, scipy and
+the independent numpy reference (tests/reference_occupant_risk.py, written from the
+standards' text, sharing no code)."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import reference_occupant_risk as reference
+import scipy.signal
+
+from barrierjax.assess import filters, occupant_risk
+from barrierjax.assess.matrices import G
+
+DT = 1e-4  # 10 kHz, as crash-test records are sampled
+T = np.arange(0.0, 0.6, DT)
+
+
+def half_sine(amplitude, duration, t=T):
+    return jnp.where(t < duration, amplitude * jnp.sin(jnp.pi * t / duration), 0.0)
+
+
+def haversine(amplitude, duration, t=T):
+    return jnp.where(t < duration, amplitude * jnp.sin(jnp.pi * t / duration) ** 2, 0.0)
+
+
+def trapezoid(plateau, ramp, hold, t=T, start=0.05):
+    """Zero, a linear ramp of `ramp` s up to `plateau`, `hold` s at it, a ramp down."""
+    up = np.clip((t - start) / ramp, 0.0, 1.0) if ramp > 0 else (t >= start) * 1.0
+    end = start + ramp + hold
+    down = np.clip(1.0 - (t - end) / ramp, 0.0, 1.0) if ramp > 0 else (t < end) * 1.0
+    return plateau * np.minimum(up, down)
+
+
+@pytest.mark.parametrize("a", [50.0, 200.0])
+def test_constant_deceleration_closed_form(a):
+    """A constant deceleration a: the occupant travels 0.6 m at t = sqrt(1.2 / a) with
+    OIV = sqrt(2 a 0.6); ORA and PHD are a; THIV = OIV without yaw."""
+    zeros = np.zeros_like(T)
+    r = occupant_risk(T, np.full_like(T, -a), zeros)
+    assert float(r.t_impact) == pytest.approx(np.sqrt(1.2 / a), rel=1e-12)
+    assert float(r.oiv_x) == pytest.approx(np.sqrt(2 * a * 0.6), rel=1e-10)
+    assert float(r.oiv_y) == 0.0
+    assert float(r.ora_x) == pytest.approx(a, rel=1e-10)
+    assert float(r.thiv) == pytest.approx(float(r.oiv_x), rel=1e-12)
+    assert float(r.phd) == pytest.approx(a, rel=1e-10)
+    assert bool(r.impact_in_record)
+
+
+def test_lateral_constant_acceleration_reaches_the_side_first():
+    a = 40.0  # to the left: the occupant moves right, 0.3 m at sqrt(0.6 / a)
+    r = occupant_risk(T, np.zeros_like(T), np.full_like(T, a))
+    assert float(r.t_impact) == pytest.approx(np.sqrt(0.6 / a), rel=1e-12)
+    assert float(r.oiv_y) == pytest.approx(-np.sqrt(2 * a * 0.3), rel=1e-10)
+
+
+def test_no_motion_gives_no_impact_and_no_nan():
+    zeros = np.zeros_like(T)
+    r = occupant_risk(T, zeros, zeros)
+    assert np.isinf(r.t_impact) and np.isinf(r.t_head)
+    values = [float(getattr(r, f)) for f in ("oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi")]
+    assert values == [0.0] * 7
+    assert not bool(r.impact_in_record)
+    grad = jax.grad(lambda s: occupant_risk(T, s * zeros, zeros).oiv_x)(1.0)
+    assert np.isfinite(grad)
+
+
+def test_record_that_ends_at_rest_before_the_impact_continues_in_free_flight():
+    """A vehicle stopped from 10 m/s in 0.2 m (a model's history ends at rest): the
+    occupant hits after the record, at the full 10 m/s."""
+    t = np.arange(0.0, 0.04 + DT / 2, DT)
+    r = occupant_risk(t, np.full_like(t, -250.0), np.zeros_like(t))  # 10 m/s gone in 40 ms
+    assert float(r.oiv_x) == pytest.approx(10.0, rel=1e-10)
+    d_end = 0.5 * 250.0 * 0.04**2
+    assert float(r.t_impact) == pytest.approx(0.04 + (0.6 - d_end) / 10.0, rel=1e-10)
+    assert not bool(r.impact_in_record) and float(r.ora_x) == 0.0
+
+
+@pytest.mark.parametrize("pulse", [half_sine, haversine])
+def test_pulses_against_the_independent_reference(pulse):
+    """Half-sine and haversine pulses with yaw, against the numpy reference (constant
+    acceleration in a step there, linear here; both second order: agreement to 1e-5)."""
+    ax, ay = np.asarray(pulse(-180.0, 0.12)), np.asarray(pulse(70.0, 0.12))
+    yaw = np.asarray(pulse(1.5, 0.12))
+    az = np.asarray(pulse(20.0, 0.12))
+    mine = occupant_risk(T, ax, ay, yaw_rate=yaw, az=az)
+    ref = reference.occupant_risk(T, ax, ay, yaw_rate=yaw, az=az)
+    for name in ("t_impact", "oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi"):
+        assert float(getattr(mine, name)) == pytest.approx(ref[name], rel=1e-5, abs=1e-6), name
+
+
+def test_asi_1998_of_a_long_pulse_is_its_plateau_over_12_g():
+    a = 6.0 * G
+    ax = trapezoid(-a, 0.0, 0.2)
+    r = occupant_risk(T, ax, np.zeros_like(T), asi_edition="1998")
+    assert float(r.asi) == pytest.approx(a / (12 * G), rel=1e-12)
+
+
+def test_asi_2010_overshoots_a_step_and_tends_to_the_plateau_as_ramps_lengthen():
+    """Measured (ASI over the plateau's a / 12 g): a rectangular pulse 1.0335, the step
+    response's overshoot 1 + exp(-3 pi / 4) / (2 sqrt 2) of two passes of the 2-pole
+    Butterworth; linear ramps of 20, 80, 200, 800 ms: 1.0301, 1.0114, 1.0045, 1.0011 (the
+    excess falls about as 1 / ramp, from the ramps' corners)."""
+    a = 6.0 * G
+    t = np.arange(0.0, 2.5, DT)
+    ratios = [
+        float(occupant_risk(t, trapezoid(-a, ramp, 0.4, t), np.zeros_like(t)).asi) / (a / (12 * G))
+        for ramp in (0.0, 0.02, 0.08, 0.2, 0.8)
+    ]
+    assert ratios[0] == pytest.approx(1 + np.exp(-3 * np.pi / 4) / (2 * np.sqrt(2)), rel=2e-3)
+    assert all(earlier > later for earlier, later in zip(ratios, ratios[1:]))
+    assert 1.0 < ratios[-1] < 1.002
+
+
+@pytest.mark.parametrize("cfc", [60, 180, 600, 1000])
+def test_cfc_filter_lies_in_the_j211_corridor(cfc):
+    """The gain at J211's defining points (F_L..F_H flat within 0.5 dB; -1 dB at F_H at
+    most; -3 dB at F_N = 5/3 CFC; -4 dB bound there) and beyond, at 10 kHz and 50 kHz."""
+    for dt in (1e-4, 2e-5):
+        design = filters.J211_DESIGN_FACTOR * cfc
+        corridor = reference.cfc_corridor(cfc)
+        nyquist = 0.5 / dt
+        for f in np.geomspace(corridor["FL"], min(4 * corridor["FN"], 0.9 * nyquist), 60):
+            gain = 20 * np.log10(filters.filter_gain(f, dt, design))
+            lower, upper = reference.corridor_bounds(cfc, f)
+            assert lower - 1e-9 <= gain <= upper + 1e-9, (dt, f, gain)
+        if dt == 2e-5 and cfc <= 180:  # the bilinear warp is small at F_N << Nyquist
+            fn_gain = 20 * np.log10(filters.filter_gain(corridor["FN"], dt, design))
+            assert fn_gain == pytest.approx(-3.0103, abs=0.05)
+
+
+def test_measured_sine_gain_equals_the_exact_response():
+    f, cfc = 200.0, 180
+    t = np.arange(0.0, 0.5, DT)
+    y = np.asarray(filters.cfc_filter(np.sin(2 * np.pi * f * t), DT, cfc))
+    middle = slice(1000, 4000)  # 60 whole periods, away from the ends
+    phase = 2 * np.pi * f * t[middle]
+    measured = np.hypot(*(2 * np.mean(y[middle] * basis(phase)) for basis in (np.sin, np.cos)))
+    exact = filters.filter_gain(f, DT, filters.J211_DESIGN_FACTOR * cfc)
+    assert measured == pytest.approx(exact, rel=1e-3)
+
+
+def test_filtered_record_equals_scipy_filtfilt():
+    """scipy's butter(2) (the same bilinear design) with filtfilt, padding by odd
+    reflection of the same length, starting from the steady state as here."""
+    rng = np.random.default_rng(1)
+    x = np.cumsum(rng.normal(size=3000))
+    n_pad = 100
+    for cfc in (60, 180):
+        design = filters.J211_DESIGN_FACTOR * cfc
+        b, a = scipy.signal.butter(2, design, fs=1 / DT)
+        expected = scipy.signal.filtfilt(b, a, x, padtype="odd", padlen=n_pad)
+        np.testing.assert_allclose(filters.cfc_filter(x, DT, cfc), expected, rtol=0, atol=1e-9 * np.ptp(x))
+    b, a = scipy.signal.butter(2, 13.0, fs=1 / DT)
+    padded = np.concatenate([np.zeros(5000), x, np.zeros(5000)])
+    expected = scipy.signal.filtfilt(b, a, padded, padtype=None)[5000:-5000]
+    got = filters.phaseless_lowpass(x, DT, 13.0, pad_seconds=0.5, pad="zero")
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * np.ptp(x))
+
+
+def test_vmap_and_batch_axes_equal_the_loop():
+    amplitudes = np.array([-120.0, -200.0, -260.0])
+    ax = np.stack([np.asarray(half_sine(a, 0.1)) for a in amplitudes])
+    ay = 0.3 * ax[::-1]
+    batched = occupant_risk(T, ax, ay, yaw_rate=ax / 100)
+    mapped = jax.vmap(lambda x, y: occupant_risk(T, x, y, yaw_rate=x / 100))(ax, ay)
+    for i in range(3):
+        single = occupant_risk(T, ax[i], ay[i], yaw_rate=ax[i] / 100)
+        for name in ("t_impact", "oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi"):
+            expected = float(getattr(single, name))
+            assert float(getattr(batched, name)[i]) == pytest.approx(expected, rel=1e-12), name
+            assert float(getattr(mapped, name)[i]) == pytest.approx(expected, rel=1e-12), name
+
+
+@pytest.mark.parametrize("name", ["oiv_x", "ora_x", "thiv", "asi", "t_impact"])
+def test_gradients_in_pulse_amplitude_and_duration_match_finite_differences(name):
+    def metric(params):
+        amplitude, duration = params
+        ax = half_sine(-amplitude, duration)
+        return getattr(occupant_risk(T, ax, 0.3 * ax, yaw_rate=ax / 200), name)
+
+    x0 = jnp.asarray([150.0, 0.11037])  # the pulse's end between samples (a kink on one)
+    grad = np.asarray(jax.grad(metric)(x0))
+    for j in range(2):
+        h = 1e-5 * float(x0[j])
+        step = jnp.zeros(2).at[j].set(h)
+        fd = (float(metric(x0 + step)) - float(metric(x0 - step))) / (2 * h)
+        assert grad[j] == pytest.approx(fd, rel=1e-5, abs=1e-9), j
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (dict(ax=np.full(T.shape, np.nan)), "ax must be finite"),
+        (dict(t=np.r_[T[:10], T[9], T[11:]]), "t must be strictly increasing"),
+        (dict(t=T * (1 + 0.1 * (T > 0.3))), "t must be uniformly sampled"),
+        (dict(ay=np.zeros(5)), "ay must have the samples of t"),
+        (dict(t=T[:2], ax=np.zeros(2), ay=np.zeros(2)), "t must be a 1-D array of at least 3"),
+        (dict(asi_edition="2003"), "asi_edition must be one of"),
+    ],
+)
+def test_bad_inputs_name_the_field_and_the_rule(change, message):
+    kwargs = dict(t=T, ax=np.zeros_like(T), ay=np.zeros_like(T)) | change
+    with pytest.raises(ValueError, match=message):
+        occupant_risk(**kwargs)
+
+
+def test_nan_inside_jit_raises_instead_of_propagating():
+    ax = np.zeros_like(T)
+    ax[100] = np.nan
+    with pytest.raises(Exception, match="ax must be finite"):
+        jax.jit(lambda x: occupant_risk(T, x, jnp.zeros_like(x)).oiv_x)(ax).block_until_ready()
