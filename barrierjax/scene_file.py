@@ -60,7 +60,6 @@ V0 = v t0 / L = 0.115. `barrierjax run` gives a deflection of about 0.41 m.
 
 from __future__ import annotations
 
-import functools
 import importlib.resources
 import math
 import re
@@ -69,6 +68,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from . import units
 from .scene import Barrier, Impact, Scene, Vehicle
 
 __all__ = [
@@ -179,22 +179,9 @@ def field_key(message: str) -> Field | None:
     return None
 
 
-@functools.lru_cache(maxsize=1)
-def _registry():
-    import pint  # deferred: importing it takes about a fifth of a second
-
-    # pint's own disk cache of its parsed definitions (under the user's cache folder):
-    # building the registry from them takes 0.02 s, from the definitions 0.2 s. Without a
-    # writable cache folder, the registry is built from the definitions.
-    try:
-        return pint.UnitRegistry(cache_folder=":auto:")
-    except OSError:
-        return pint.UnitRegistry()
-
-
 def _is_angle(quantity) -> bool:
     """Angles are dimensionless in pint; accept only units that reduce to the radian."""
-    root = _registry().get_root_units(quantity.units)[1]
+    root = units.registry().get_root_units(quantity.units)[1]
     return str(root) == "radian"
 
 
@@ -216,7 +203,7 @@ def parse_quantity(value, field: Field) -> float:
             )
         return float(value)
     try:
-        quantity = _registry().Quantity(value)
+        quantity = units.registry().Quantity(value)
         float(quantity.magnitude)  # complex or array magnitudes fail here
     except Exception:  # pint raises many kinds (UndefinedUnitError, AssertionError, ...)
         raise fail(f"{expected}, got '{value}', which is not a quantity "

@@ -3,6 +3,8 @@
     barrierjax run [SCENE.toml] [--json] [--out DIR] [--no-plots]
     barrierjax run cantilever-N [--rate-independent] [--scheme S] [--dt S] [--t-end S]
                                 [--elements N] [--json] [--out DIR] [--no-plots]
+    barrierjax assess RECORD.csv [--standard mash|en1317|nchrp350] [--cfc N]
+                                 [--asi-edition 2010|1998] [--json] [--out DIR] [--no-plots]
     barrierjax figures [--out DIR] [--only NUMBER ...]
     barrierjax optimize [--json]
 
@@ -45,6 +47,7 @@ from .cantilever import (
     cantilever_dict,
     format_cantilever_summary,
 )
+from .assess import assess_command
 from .figures import figures_command
 from .optimize import optimize_command
 from .output import EXIT_FAILED, EXIT_OK, EXIT_USAGE, CommandError, enable_x64
@@ -146,6 +149,35 @@ def build_parser() -> argparse.ArgumentParser:
     beam.add_argument("--dt", type=float, metavar="S", help="step after the pulse (s)")
     beam.add_argument("--t-end", type=float, metavar="S", help="end of the run (s)")
     beam.add_argument("--elements", type=int, metavar="N", help="number of elements")
+
+    assess = _add_command(
+        commands, "assess", assess_command,
+        json_help="print one JSON object in SI (t_impact, oiv_x, oiv_y, ora_x, ora_y, thiv, "
+        "phd, asi, criteria, ...) and nothing else on stdout",
+        out=("barrierjax-assess", "plots"),
+        help="occupant risk of a crash-test accelerometer record (MASH, EN 1317)",
+        description="Read a crash-test record (CSV with a header row: t, ax, ay and "
+        "optionally az, yaw_rate, each optionally with its unit in brackets, e.g. "
+        "'t [ms]', 'ax [g]', 'yaw_rate [deg/s]'; SI without), compute OIV, ORA, THIV, PHD "
+        "and ASI, print them against the standard's limits and write plots.",
+        epilog="Exit status: 0 the record passes every criterion, 1 it fails one, 2 the "
+        "record cannot be assessed (one line says which column or row, and why).",
+    )
+    assess.add_argument("record", type=Path, metavar="RECORD.csv", help="the record")
+    assess.add_argument(
+        "--standard", choices=("mash", "en1317", "nchrp350"), default="mash",
+        help="the limits to judge by (default mash)",
+    )
+    assess.add_argument(
+        "--cfc", type=int, choices=(0, 60, 180, 600, 1000), default=180,
+        help="SAE J211 channel filter class applied to the accelerations first (default "
+        "180; 0 for none, a record already filtered)",
+    )
+    assess.add_argument(
+        "--asi-edition", choices=("2010", "1998"), default="2010",
+        help="EN 1317-1 edition of the ASI: 2010 (13 Hz filter, default) or 1998 (50 ms average)",
+    )
+    assess.add_argument("--no-plots", action="store_true", help="do not write plots")
 
     figures = _add_command(
         commands, "figures", figures_command,
