@@ -48,6 +48,9 @@ UNIFORM_TOLERANCE = 1e-3  # relative spread of the time steps accepted as unifor
 class RecordError(ValueError):
     """A record that cannot be read, with one line that says where and why."""
 
+    def __init__(self, message: str):
+        super().__init__(" ".join(str(message).split()))
+
 
 @dataclass(frozen=True)
 class Record:
