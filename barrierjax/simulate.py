@@ -136,11 +136,16 @@ def simulate(
 
 
 def _scaled(units, scales, quantities):
-    """Each of `units`' fields of `quantities` times its scale (a field of `Scales`)."""
-    return {
-        name: getattr(quantities, name) * (1.0 if unit is None else getattr(scales, unit))
-        for name, unit in units.items()
-    }
+    """Each of `units`' fields of `quantities` times its scale (a field of `Scales`; a
+    batch's scales meet a history's samples on the batch axes)."""
+
+    def scaled(value, unit):
+        if unit is None:
+            return value
+        scale = jnp.asarray(getattr(scales, unit))
+        return value * scale.reshape(scale.shape + (1,) * (jnp.ndim(value) - scale.ndim))
+
+    return {name: scaled(getattr(quantities, name), unit) for name, unit in units.items()}
 
 
 # (One compiled function, not a dozen small ones: each eager operation is an executable

@@ -100,7 +100,9 @@ def test_run_json_default_scene(capsys, tmp_path):
     check_against_simulate(data, default_scene())
     assert data["inputs"]["speed_m_s"] == pytest.approx(40 / 3.6)
     assert 0.3 < data["max_deflection_m"] < 0.5  # the documented ~0.4 m
-    assert "compiling" in err  # progress goes to stderr
+    # Progress goes to stderr ("compiling ..." only while a solve takes over 0.2 s: not
+    # when an earlier test in this process compiled the model).
+    assert err and all(line.startswith(("compiling", "writing")) for line in err.splitlines())
     assert sorted(p.name for p in tmp_path.iterdir()) == ["deflected_shape.png", "histories.png"]
 
 

@@ -42,8 +42,9 @@ def flail_space(ax, ay, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y):
     oiv (2,), in_record). Without an impact (the occupant at rest relative to the vehicle
     at the record's end) t_impact is +inf and oiv zero."""
     position, velocity = occupant_motion(ax, ay, dt)
-    t_x, in_x = signals.first_crossing(position[:, 0], velocity[:, 0], flail_x, dt)
-    t_y, in_y = signals.first_crossing(position[:, 1], velocity[:, 1], flail_y, dt)
+    (t_x, t_y), (in_x, in_y) = signals.first_crossings(
+        position, velocity, jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)]), dt
+    )
     t_impact = jnp.minimum(t_x, t_y)
     finite = jnp.isfinite(t_impact)
     _, oiv = signals.hermite_at(position, velocity, dt)(jnp.where(finite, t_impact, 0.0))

@@ -44,8 +44,9 @@ def head_impact(ax, ay, yaw_rate, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y):
     """(t_head, thiv, in_record) of one record: when the theoretical head strikes and its
     speed relative to the vehicle then (m/s); +inf and zero without an impact."""
     position, velocity = head_motion(ax, ay, yaw_rate, dt)
-    t_x, in_x = signals.first_crossing(position[:, 0], velocity[:, 0], flail_x, dt)
-    t_y, in_y = signals.first_crossing(position[:, 1], velocity[:, 1], flail_y, dt)
+    (t_x, t_y), (in_x, in_y) = signals.first_crossings(
+        position, velocity, jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)]), dt
+    )
     t_head = jnp.minimum(t_x, t_y)
     finite = jnp.isfinite(t_head)
     _, relative = signals.hermite_at(position, velocity, dt)(jnp.where(finite, t_head, 0.0))

@@ -11,6 +11,8 @@ standard prescribes (`barrierjax.assess.filters.cfc_filter`; `barrierjax assess`
 filters' padding); leading batch axes of the accelerations are mapped over.
 """
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -81,7 +83,14 @@ def sampling_step(t) -> float:
     return float(dt)
 
 
-def _one_record(ax, ay, yaw_rate, az, *, dt, t0, edition, flail_x, flail_y):
+@functools.partial(jax.jit, static_argnames=("dt", "t0", "edition"))
+def _records(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
+    """`_one_record` over the leading axis: one executable per record length and step."""
+    one = functools.partial(_one_record, dt=dt, t0=t0, edition=edition)
+    return jax.vmap(one, in_axes=(0, 0, 0, 0, None, None))(ax, ay, yaw_rate, az, flail_x, flail_y)
+
+
+def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
     t_impact, oiv, in_record = flail_space(ax, ay, dt, flail_x, flail_y)
     ora_x, ora_y = ridedown(ax, ay, dt, t_impact)
     t_head, thiv, head_in_record = head_impact(ax, ay, yaw_rate, dt, flail_x, flail_y)
@@ -154,11 +163,5 @@ def occupant_risk(
     channels = {name: _finite(name, jnp.asarray(x, dtype=float)) for name, x in channels.items()}
     shape = jnp.broadcast_shapes(*(x.shape for x in channels.values()))
     flat = [jnp.broadcast_to(x, shape).reshape(-1, shape[-1]) for x in channels.values()]
-
-    def one(ax, ay, yaw_rate, az):
-        return _one_record(
-            ax, ay, yaw_rate, az, dt=dt, t0=t0, edition=asi_edition, flail_x=flail_x, flail_y=flail_y
-        )
-
-    risk = jax.vmap(one)(*flat)
+    risk = _records(*flat, jnp.asarray(flail_x, float), jnp.asarray(flail_y, float), dt=dt, t0=t0, edition=asi_edition)
     return jax.tree.map(lambda leaf: leaf.reshape(shape[:-1]), risk)

@@ -17,6 +17,7 @@ import jax.numpy as jnp
 __all__ = [
     "cumulative_integrals",
     "first_crossing",
+    "first_crossings",
     "hermite_at",
     "integral_at",
     "max_window_mean",
@@ -75,6 +76,11 @@ def hermite_at(position, velocity, dt):
     return at
 
 
+def first_crossings(position, velocity, limits, dt):
+    """`first_crossing` of each component: position and velocity (n, k), limits (k,)."""
+    return jax.vmap(first_crossing, in_axes=(1, 1, 0, None))(position, velocity, limits, dt)
+
+
 def first_crossing(position, velocity, limit, dt, newton_steps: int = 6):
     """When the 1-D path (`position` samples, slopes `velocity`, on `hermite_at`'s
     interpolant) first reaches |position| = `limit`: (time from the first sample, whether
@@ -109,10 +115,13 @@ def first_crossing(position, velocity, limit, dt, newton_steps: int = 6):
         step = (sign * p - limit) / jnp.where(v == 0.0, 1.0, sign * v)
         return tau - step
 
-    tau = jax.lax.stop_gradient(guess)
-    for _ in range(newton_steps):
-        tau = jnp.clip(jax.lax.stop_gradient(newton(tau)), lower, jnp.minimum(upper, 1e30))
-    tau = newton(tau)
+    def iterate(_, tau):
+        return jnp.clip(newton(tau), lower, jnp.minimum(upper, 1e30))
+
+    bounds = jax.lax.stop_gradient((lower, upper))
+    lower, upper = bounds
+    tau = jax.lax.fori_loop(0, newton_steps, iterate, jax.lax.stop_gradient(guess))
+    tau = newton(jax.lax.stop_gradient(tau))
     return jnp.where(never, jnp.inf, tau), in_record
 
 

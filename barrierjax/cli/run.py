@@ -15,7 +15,13 @@ from ..hinge.response import RESULT_UNITS, kinetic_energy_balance
 from .cantilever import cantilever_number, run_cantilever
 from .output import EXIT_FAILED, CommandError, as_float, print_result, progress, progress_after
 
-__all__ = ["STANDARD_GRAVITY", "format_summary", "result_dict", "run_command"]
+__all__ = [
+    "STANDARD_GRAVITY",
+    "format_summary",
+    "occupant_risk_dict",
+    "result_dict",
+    "run_command",
+]
 
 STANDARD_GRAVITY = 9.80665  # m/s^2, to express decelerations in g
 
@@ -80,6 +86,47 @@ def result_dict(scene, result, name: str = "") -> dict:
             -kinetic_energy_balance(result, scene.vehicle.mass, scene.impact.speed)
         ),
     }
+
+
+_RISK_KEYS = {"t_impact": "t_impact_s", "oiv_x": "oiv_x_m_s", "oiv_y": "oiv_y_m_s",
+              "ora_x": "ora_x_m_s2", "ora_y": "ora_y_m_s2", "t_head": "t_head_s",
+              "thiv": "thiv_m_s", "phd": "phd_m_s2", "asi": "asi"}  # fmt: skip
+
+
+def occupant_risk_dict(result) -> dict:
+    """The occupant risk of a `simulate` result (`barrierjax.assess.assess`), SI, with the
+    verdicts of MASH and EN 1317 (`barrierjax.assess.judge`)."""
+    from ..assess import assess, judge
+    from ..assess.verdict import standard_name
+
+    risk = jax.tree.map(np.asarray, assess(result))
+    data = {key: as_float(getattr(risk, name)) for name, key in _RISK_KEYS.items()}
+    data["impact_within_history"] = bool(risk.impact_in_record)
+    for standard in ("mash", "en1317"):
+        criteria = judge(risk, standard)
+        data[standard_name(standard)] = {
+            "passed": all(c.passed for c in criteria),
+            "criteria": {c.name: c.verdict for c in criteria},
+        }
+    return data
+
+
+def _occupant_risk_lines(risk: dict) -> list[str]:
+    g = STANDARD_GRAVITY
+    after = "" if risk["impact_within_history"] else " (after the vehicle stopped)"
+    mash = ", ".join(f"{k} {v}" for k, v in risk["MASH"]["criteria"].items())
+    en = ", ".join(f"{k} {v}" for k, v in risk["EN 1317"]["criteria"].items())
+    return [
+        "",
+        "Occupant risk (barrierjax.assess; the vehicle's acceleration from the history)",
+        f"  occupant impact               {risk['t_impact_s'] * 1e3:10.1f} ms{after}",
+        f"  OIV x, y                      {risk['oiv_x_m_s']:10.2f} {risk['oiv_y_m_s']:7.2f} m/s",
+        f"  ORA x, y                      {risk['ora_x_m_s2'] / g:10.2f} {risk['ora_y_m_s2'] / g:7.2f} g",
+        f"  THIV, PHD                     {risk['thiv_m_s'] * 3.6:10.1f} km/h {risk['phd_m_s2'] / g:6.2f} g",
+        f"  ASI                           {risk['asi']:10.2f}",
+        f"  MASH     {'pass' if risk['MASH']['passed'] else 'FAIL'}: {mash}",
+        f"  EN 1317  {'pass' if risk['EN 1317']['passed'] else 'FAIL'}: {en}",
+    ]
 
 
 def _string_start(result, scales) -> float | None:
@@ -158,6 +205,8 @@ def format_summary(data: dict) -> str:
         f"  kept by the vehicle    {share(data['exit_kinetic_energy_J'])}",
         f"  balance error          {data['energy_balance_error_J']:.2e} J",
     ]
+    if "occupant_risk" in data:
+        lines += _occupant_risk_lines(data["occupant_risk"])
     return "\n".join(lines)
 
 
@@ -205,6 +254,7 @@ def run_command(args) -> int:
     except (NotImplementedError, ValueError) as error:
         raise _scene_error(error) from None
     data = result_dict(scene, result, name)
+    data["occupant_risk"] = occupant_risk_dict(result)
     bad = [k for k, v in data.items() if isinstance(v, float) and not math.isfinite(v)]
     if bad:
         raise CommandError(f"the solution is not finite ({', '.join(bad)})", EXIT_FAILED)

@@ -1,0 +1,78 @@
+"""`assess(result)`: the occupant risk of an impact model's result, through the one result
+vocabulary (`barrierjax.hinge.response.ImpactHistory`).
+
+The report's vehicle is a mass that does not turn: its forward axis is the direction of its
+velocity at contact, at the impact angle to the barrier, which lies on its right. The
+history gives its velocity normal to the barrier (towards it) and along it; `vehicle_record`
+interpolates both linearly between the history's samples onto a uniform grid (10 kHz, a
+crash test's sampling, unless told) and differentiates them there (central differences) for
+the vehicle-fixed accelerations that `occupant_risk` reads. After the history (the vehicle
+at rest, or leaving the barrier) the vehicle moves on unaccelerated. The metrics are as
+accurate as the history is fine: the default 200 samples of `simulate` resolve the 10 ms
+averages; the accelerations' peaks between samples are smoothed.
+"""
+
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .occupant import OccupantRisk, occupant_risk
+
+__all__ = ["ASSESS_STEP", "assess", "vehicle_record"]
+
+ASSESS_STEP = 1e-4  # s: the uniform grid's step (10 kHz)
+
+
+def _duration(history) -> float:
+    try:
+        return float(np.max(np.asarray(history.time)))
+    except Exception:  # a traced result: jax raises its own error types here
+        raise ValueError("assess: t_end must be given for a traced result (under jit or grad)") from None
+
+
+def vehicle_record(history, *, dt: float = ASSESS_STEP, t_end: float | None = None):
+    """(t, ax, ay) of one result's `history`: the vehicle's accelerations on its own axes
+    (x forward, y left), m/s^2, at uniform times `t` (step `dt`) from contact to `t_end`
+    (default: the history's end, which must then be concrete). Differentiable."""
+    t_end = _duration(history) if t_end is None else float(t_end)
+    n = max(int(math.ceil(t_end / dt - 1e-9)) + 1, 3)
+    t = dt * np.arange(n)
+    return (t, *_vehicle_axes(history.time, history.vehicle_velocity, history.vehicle_tangential_velocity, t, dt))
+
+
+@functools.partial(jax.jit, static_argnames="dt")
+def _vehicle_axes(time, normal_velocity, tangential_velocity, t, dt):
+    """The accelerations on the vehicle's forward and left axes at the uniform times `t`."""
+    normal = jnp.interp(t, time, normal_velocity)
+    along = jnp.interp(t, time, tangential_velocity)
+    speed = jnp.hypot(normal_velocity[0], tangential_velocity[0])
+    sin, cos = normal_velocity[0] / speed, tangential_velocity[0] / speed
+    a_normal, a_along = jnp.gradient(normal, dt), jnp.gradient(along, dt)
+    forward = sin * a_normal + cos * a_along
+    left = -cos * a_normal + sin * a_along
+    return forward, left
+
+
+def assess(result, *, dt: float = ASSESS_STEP, t_end: float | None = None, asi_edition: str = "2010") -> OccupantRisk:
+    """The occupant risk (`OccupantRisk`) of a `simulate` result with a history (a normal,
+    oblique or axial impact; batched results are assessed member by member, on a grid to
+    the longest history's end)."""
+    history = result.history
+    if history is None:
+        raise ValueError("assess: the result has no history: simulate(scene, n_history>=2)")
+    batch = np.shape(history.time)[:-1]
+    t_end = _duration(history) if t_end is None else t_end
+    if not batch:
+        t, ax, ay = vehicle_record(history, dt=dt, t_end=t_end)
+        return occupant_risk(t, ax, ay, asi_edition=asi_edition)
+    records = [
+        vehicle_record(jax.tree.map(lambda leaf, i=index: leaf[i], history), dt=dt, t_end=t_end)
+        for index in np.ndindex(*batch)
+    ]
+    t = records[0][0]
+    ax = jnp.stack([r[1] for r in records]).reshape(*batch, -1)
+    ay = jnp.stack([r[2] for r in records]).reshape(*batch, -1)
+    return occupant_risk(t, ax, ay, asi_edition=asi_edition)
