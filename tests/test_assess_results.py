@@ -98,3 +98,17 @@ def test_axial_result_is_assessed():
 def test_results_without_history_are_refused():
     with pytest.raises(ValueError, match="no history"):
         assess(bj.simulate(crushing_scene(), n_history=0))
+
+
+def test_run_reports_the_occupant_risk(capsys, tmp_path):
+    import json
+
+    from barrierjax import cli
+
+    status = cli.main(["run", "--json", "--no-plots"])
+    data = json.loads(capsys.readouterr().out)["occupant_risk"]
+    assert status == 0
+    assert data["oiv_x_m_s"] == pytest.approx(40 / 3.6, rel=1e-9)  # stopped within 0.6 m
+    assert not data["impact_within_history"]
+    assert data["MASH"]["criteria"]["OIV x"] == "pass"  # 11.1 m/s < 12.2 m/s
+    assert data["EN 1317"]["criteria"]["THIV"] == "fail"  # 40 km/h > 33 km/h

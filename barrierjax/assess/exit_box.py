@@ -1,0 +1,65 @@
+"""Exit boxes (MASH 2016; EN 1317-2 "CEN box"): after the vehicle loses contact with the
+barrier, its path must stay within a line parallel to the barrier's original traffic face,
+at the box's width A, over the box's length B downstream of the loss of contact. The box
+dimensions, with their sources, are `barrierjax.assess.matrices.EXIT_BOXES`
+(`mash_exit_box`, `cen_exit_box`).
+
+`exit_box_check` judges a sampled path of the vehicle's wheel track farthest from the
+barrier; past its last sample the path runs on straight. `result_exit_box` judges an oblique
+impact's result: the report's vehicle leaves the barrier with its exit speed and angle and
+moves on straight (nothing acts on it after the loss of contact, where its history ends); it
+is a point that does not turn, so its far wheel track is taken at the vehicle's width from
+the barrier's face at contact, moving with the point.
+"""
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Bool, Float
+
+from . import matrices
+
+__all__ = ["ExitBoxCheck", "exit_box_check", "result_exit_box"]
+
+
+class ExitBoxCheck(eqx.Module):
+    """`passed`: the path stays within the box; `largest_offset`: the path's largest
+    distance from the barrier's original face within the box's length, m; `margin`:
+    the box's width less it (negative where it leaves the box)."""
+
+    passed: Bool[Array, ""]
+    largest_offset: Float[Array, ""]
+    margin: Float[Array, ""]
+
+
+def exit_box_check(along, offset, width_a, length_b) -> ExitBoxCheck:
+    """Judge a path (`along` the barrier from the loss of contact and `offset` from its
+    original traffic face, m, samples from the loss of contact on; at least 2) against
+    a box A = `width_a` by B = `length_b` (m). Differentiable in the path and the box."""
+    along, offset = jnp.asarray(along), jnp.asarray(offset)
+    if along.shape != offset.shape or along.ndim != 1 or along.shape[0] < 2:
+        raise ValueError(f"along and offset must be 1-D paths of the same length >= 2; got {along.shape}, {offset.shape}")
+    travelled = along - along[0]
+    slope = (offset[-1] - offset[-2]) / (along[-1] - along[-2])
+    at_end = offset[-1] + slope * jnp.maximum(length_b - travelled[-1], 0.0)
+    inside = travelled <= length_b
+    largest = jnp.maximum(jnp.max(jnp.where(inside, offset, -jnp.inf)), jnp.where(travelled[-1] < length_b, at_end, -jnp.inf))
+    return ExitBoxCheck(passed=largest <= width_a, largest_offset=largest, margin=width_a - largest)
+
+
+def result_exit_box(result, vehicle_length, vehicle_width, box: str = "MASH") -> ExitBoxCheck:
+    """The exit-box check of an oblique impact's `simulate` result (with its history),
+    for a vehicle of `vehicle_length` and `vehicle_width` (m) and the box "MASH",
+    "CEN car" or "CEN heavy" (`matrices.EXIT_BOXES`)."""
+    if box not in matrices.EXIT_BOXES:
+        raise ValueError(f"box must be one of {', '.join(matrices.EXIT_BOXES)}; got {box!r}")
+    history = result.history
+    if history is None:
+        raise ValueError("result_exit_box: the result has no history: simulate(scene, n_history>=2)")
+    spec = matrices.EXIT_BOXES[box]
+    width_a = spec.offset + vehicle_width + spec.length_factor * vehicle_length
+    exit_offset = vehicle_width - history.vehicle_displacement[-1]
+    rise = spec.downstream * jnp.tan(jnp.radians(result.exit_angle_deg))
+    start = history.vehicle_position[-1]
+    along = jnp.stack([start, start + spec.downstream])
+    return exit_box_check(along, jnp.stack([exit_offset, exit_offset + rise]), width_a, spec.downstream)

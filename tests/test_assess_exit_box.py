@@ -1,0 +1,69 @@
+"""Exit boxes: a straight exit path against its closed form, a path that leaves the box,
+the oblique model's result, gradients and bad input."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import barrierjax as bj
+from barrierjax import scene_file
+from barrierjax.assess.exit_box import exit_box_check, result_exit_box
+from barrierjax.assess import matrices
+from barrierjax.assess.matrices import EXIT_BOXES, mash_exit_box
+
+
+def straight(offset0, angle_deg, length):
+    along = jnp.linspace(0.0, length, 11)
+    return along, offset0 + along * jnp.tan(jnp.radians(angle_deg))
+
+
+def test_straight_path_closed_form():
+    a, b = 5.0, 10.0
+    along, offset = straight(1.5, 15.0, 4.0)  # sampled over 4 m, straight beyond
+    check = exit_box_check(along, offset, a, b)
+    expected = 1.5 + b * np.tan(np.radians(15.0))
+    assert float(check.largest_offset) == pytest.approx(expected, rel=1e-12)
+    assert bool(check.passed) and float(check.margin) == pytest.approx(a - expected, rel=1e-12)
+    steep = exit_box_check(*straight(1.5, 25.0, 4.0), a, b)
+    assert not bool(steep.passed) and float(steep.margin) < 0
+
+
+def test_path_beyond_the_box_length_is_not_judged():
+    along = jnp.asarray([0.0, 5.0, 10.0, 12.0, 20.0])
+    offset = jnp.asarray([1.0, 2.0, 3.0, 9.0, 9.0])
+    assert float(exit_box_check(along, offset, 4.0, 10.0).largest_offset) == 3.0
+
+
+def test_gradient_of_the_margin_in_the_exit_angle():
+    def margin(angle):
+        return exit_box_check(*straight(1.5, angle, 4.0), 5.0, 10.0).margin
+
+    grad = float(jax.grad(margin)(15.0))
+    expected = -10.0 / np.cos(np.radians(15.0)) ** 2 * np.pi / 180.0
+    assert grad == pytest.approx(expected, rel=1e-10)
+
+
+def test_oblique_result_against_its_exit_angle():
+    """MASH 3-11 conditions (examples/oblique_scene.toml): the vehicle leaves at the
+    result's exit angle; the box check is its straight line from the exit point."""
+    scene = scene_file.load_scene("examples/oblique_scene.toml")
+    result = bj.simulate(scene)
+    pickup = matrices.test_vehicle("2270P", "mash")
+    check = result_exit_box(result, pickup.length, pickup.width)
+    a, b = mash_exit_box(pickup.length, pickup.width)
+    exit_offset = pickup.width - float(result.history.vehicle_displacement[-1])
+    expected = exit_offset + b * np.tan(np.radians(float(result.exit_angle_deg)))
+    assert float(check.largest_offset) == pytest.approx(expected, rel=1e-12)
+    assert bool(check.passed) == (expected <= float(a))
+    assert set(EXIT_BOXES) == {"MASH", "CEN car", "CEN heavy"}
+
+
+def test_bad_inputs():
+    with pytest.raises(ValueError, match="along and offset must be 1-D paths"):
+        exit_box_check(jnp.zeros(3), jnp.zeros(2), 1.0, 1.0)
+    scene = scene_file.load_scene("examples/oblique_scene.toml")
+    with pytest.raises(ValueError, match="box must be one of"):
+        result_exit_box(bj.simulate(scene, n_history=0), 5.0, 2.0, box="ISO")
+    with pytest.raises(ValueError, match="no history"):
+        result_exit_box(bj.simulate(scene, n_history=0), 5.0, 2.0)
