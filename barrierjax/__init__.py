@@ -3,7 +3,8 @@
 Describe a `Scene` (a `Barrier`, a `Vehicle`, an `Impact`) in any consistent units, or
 read one with `load_scene("scene.toml")`, and call `simulate(scene)` for its `Result`.
 The report's models live in `barrierjax.materials` (chapter 2), `barrierjax.hinge`
-(chapter 3) and `barrierjax.beam` (chapter 4); the sizing problem in `barrierjax.design`.
+(chapter 3) and `barrierjax.beam` (chapter 4); the sizing problem in `barrierjax.design`;
+crash-test occupant risk (MASH, EN 1317) in `barrierjax.assess`.
 """
 
 from . import beam, hinge, materials
@@ -20,7 +21,7 @@ from .scene import (
 from .scene_file import load_scene
 from .simulate import History, Result, simulate
 
-from . import design  # noqa: E402  (after simulate, which it builds on)
+from . import assess, design  # noqa: E402  (after simulate, which they build on)
 
 __all__ = [
     "Barrier",
@@ -31,6 +32,7 @@ __all__ = [
     "Scales",
     "Scene",
     "Vehicle",
+    "assess",
     "beam",
     "broadcast_scene",
     "design",

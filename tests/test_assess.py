@@ -154,7 +154,7 @@ def test_filtered_record_equals_scipy_filtfilt():
     b, a = scipy.signal.butter(2, 13.0, fs=1 / DT)
     padded = np.concatenate([np.zeros(5000), x, np.zeros(5000)])
     expected = scipy.signal.filtfilt(b, a, padded, padtype=None)[5000:-5000]
-    got = filters.phaseless_lowpass(x, DT, 13.0, pad_seconds=0.5, pad="zero")
+    got = filters.zero_padded_lowpass(x, DT, 13.0, pad_seconds=0.5)
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * np.ptp(x))
 
 

@@ -28,16 +28,16 @@ EDITIONS = ("2010", "1998")
 def conditioned_accelerations(a, dt, edition: str = "2010"):
     """The acceleration components `a` (..., 3, n) as the ASI of `edition` reads them."""
     if edition == "2010":
-        return filters.phaseless_lowpass(
-            a, dt, filters.ASI_CUTOFF, pad_seconds=ASI_PAD_SECONDS, pad="zero"
-        )
+        return filters.zero_padded_lowpass(a, dt, filters.ASI_CUTOFF, pad_seconds=ASI_PAD_SECONDS)
     if edition == "1998":
         return filters.moving_average(a, dt, ASI_AVERAGE_1998)
     raise ValueError(f"asi_edition must be one of {EDITIONS}; got {edition!r}")
 
 
 def asi_history(ax, ay, az, dt, edition: str = "2010"):
-    """ASI(t) at every sample of one record (arrays of n samples at step `dt`)."""
-    conditioned = conditioned_accelerations(jnp.stack([ax, ay, az]), dt, edition)
-    limits = jnp.asarray(ASI_LIMITS, dtype=conditioned.dtype)[:, None]
+    """ASI(t) at every sample of one record (arrays of n samples at step `dt`; `az` None
+    for none)."""
+    channels = [ax, ay] if az is None else [ax, ay, az]
+    conditioned = conditioned_accelerations(jnp.stack(channels), dt, edition)
+    limits = jnp.asarray(ASI_LIMITS[: len(channels)], dtype=conditioned.dtype)[:, None]
     return signals.safe_norm(conditioned / limits, axis=0)

@@ -49,6 +49,7 @@ __all__ = [
     "filter_gain",
     "moving_average",
     "phaseless_lowpass",
+    "zero_padded_lowpass",
 ]
 
 J211_DESIGN_FACTOR = 5.0 / 3.0 / (math.sqrt(2.0) - 1.0) ** 0.25  # 2.0775: f_d / CFC
@@ -82,36 +83,31 @@ def _one_pass(x, coefficients):
     return jnp.moveaxis(y, 0, -1)
 
 
-def _pad(x, n_pad: int, mode: str):
-    if mode == "reflect":  # point reflection about the end values (J211-1 Appendix C)
-        front = 2.0 * x[..., :1] - x[..., n_pad:0:-1]
-        back = 2.0 * x[..., -1:] - x[..., -2 : -n_pad - 2 : -1]
-    elif mode == "zero":
-        front = back = jnp.zeros((*x.shape[:-1], n_pad), x.dtype)
-    else:
-        raise ValueError(f"pad must be 'reflect' or 'zero'; got {mode!r}")
+def _reflected(x, n_pad: int):
+    """`x` extended at each end by `n_pad` samples of point reflection about the end
+    values (J211-1 Appendix C)."""
+    front = 2.0 * x[..., :1] - x[..., n_pad:0:-1]
+    back = 2.0 * x[..., -1:] - x[..., -2 : -n_pad - 2 : -1]
     return jnp.concatenate([front, x, back], axis=-1)
 
 
-def _pad_samples(x, dt, pad_seconds: float, mode: str) -> int:
-    n = int(math.ceil(pad_seconds / float(dt) - 1e-9))
-    if mode == "reflect":
-        if x.shape[-1] < 2:
-            raise ValueError(f"x must have at least 2 samples to filter; got {x.shape[-1]}")
-        n = min(n, x.shape[-1] - 1)  # a reflection cannot reach past the other end
-    return n
+def _pad_samples(dt, pad_seconds: float) -> int:
+    return int(math.ceil(pad_seconds / float(dt) - 1e-9))
 
 
-def phaseless_lowpass(x, dt, f_design, *, pad_seconds: float, pad: str = "reflect"):
+def phaseless_lowpass(x, dt, f_design, *, pad_seconds: float = CFC_PAD_SECONDS):
     """Two passes of the 2-pole Butterworth low-pass, forward then backward, with design
     frequency `f_design` (Hz, one pass's -3 dB point) at sampling step `dt` (s) along the
-    last axis of `x`. The record is extended by `pad_seconds` at each end (`pad`:
-    "reflect", J211-1's point reflection, or "zero") and the extension discarded. `dt` must
-    be concrete (it fixes the padding's sample count); `x` and `f_design` may be traced."""
+    last axis of `x`, each from rest on its first input. The record is extended by
+    `pad_seconds` of point reflection at each end (J211-1) and the extension discarded.
+    `dt` must be concrete (it fixes the padding's sample count); `x` and `f_design` may be
+    traced."""
     x = jnp.asarray(x)
-    n_pad = _pad_samples(x, dt, pad_seconds, pad)
+    if x.shape[-1] < 2:
+        raise ValueError(f"x must have at least 2 samples to filter; got {x.shape[-1]}")
+    n_pad = min(_pad_samples(dt, pad_seconds), x.shape[-1] - 1)  # within the other end
     coefficients = butterworth_coefficients(f_design, dt)
-    padded = _pad(x, n_pad, pad) if n_pad else x
+    padded = _reflected(x, n_pad) if n_pad else x
     forward = _one_pass(padded, coefficients)
     both = jnp.flip(_one_pass(jnp.flip(forward, -1), coefficients), -1)
     return both[..., n_pad : n_pad + x.shape[-1]]
@@ -123,13 +119,34 @@ def cfc_filter(x, dt, cfc, *, factor: float = J211_DESIGN_FACTOR):
     CFC (J211's 2.0775; `ISO6487_DESIGN_FACTOR` for ISO 6487's 2.0833), the record's ends
     extended by 10 ms of point reflection. Gain -3 dB at 5/3 CFC, inside J211's corridor
     (tests/test_assess_filters.py)."""
-    return phaseless_lowpass(x, dt, factor * cfc, pad_seconds=CFC_PAD_SECONDS, pad="reflect")
+    return phaseless_lowpass(x, dt, factor * cfc)
+
+
+def zero_padded_lowpass(x, dt, f_design, *, pad_seconds: float):
+    """The two passes of `phaseless_lowpass` on the record padded by `pad_seconds` of
+    zeros at each end (EN 1317-1:2010's ASI), computed in the frequency domain: on a
+    zero-padded record the two passes from rest are the linear, time-invariant filter whose
+    gain is `filter_gain` (|H|^2, real: no phase), applied here by FFT to the padded record
+    (its length rounded up to a power of two with further zeros). Equal to the recursion
+    to the rounding while the padding is long against the filter's decay (0.5 s against
+    1 / 13 Hz for the ASI: e^-29; tests/test_assess.py checks it against scipy's filtfilt),
+    and without its per-sample sequential loop."""
+    x = jnp.asarray(x)
+    n = x.shape[-1]
+    n_pad = _pad_samples(dt, pad_seconds)
+    length = 1 << int(math.ceil(math.log2(n + 2 * n_pad)))
+    frequencies = np.fft.rfftfreq(length, dt)
+    spectrum = jnp.fft.rfft(x, n=length, axis=-1)
+    spectrum = spectrum * jnp.asarray(filter_gain(frequencies, dt, f_design), dtype=spectrum.dtype)
+    return jnp.fft.irfft(spectrum, n=length, axis=-1)[..., :n]
 
 
 def filter_gain(f, dt, f_design):
     """The steady-state gain (ratio, not dB) of `phaseless_lowpass` at frequency `f` (Hz):
     the square of one pass's |H(exp(i 2 pi f dt))|, exact for the digital filter."""
-    a0, a1, a2, b1, b2 = (np.asarray(c, dtype=float) for c in butterworth_coefficients(f_design, dt))
+    with jax.ensure_compile_time_eval():  # concrete even where called under jit
+        coefficients = butterworth_coefficients(f_design, dt)
+    a0, a1, a2, b1, b2 = (np.asarray(c, dtype=float) for c in coefficients)
     z = np.exp(-2j * np.pi * np.asarray(f, dtype=float) * dt)
     h = (a0 + a1 * z + a2 * z**2) / (1.0 - b1 * z - b2 * z**2)
     return np.abs(h) ** 2

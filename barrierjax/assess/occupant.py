@@ -90,10 +90,14 @@ def _records(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
     return jax.vmap(one, in_axes=(0, 0, 0, 0, None, None))(ax, ay, yaw_rate, az, flail_x, flail_y)
 
 
+
 def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
     t_impact, oiv, in_record = flail_space(ax, ay, dt, flail_x, flail_y)
     ora_x, ora_y = ridedown(ax, ay, dt, t_impact)
-    t_head, thiv, head_in_record = head_impact(ax, ay, yaw_rate, dt, flail_x, flail_y)
+    if yaw_rate is None:  # the head moves as the flail-space occupant
+        t_head, thiv, head_in_record = t_impact, jnp.hypot(oiv[0], oiv[1]), in_record
+    else:
+        t_head, thiv, head_in_record = head_impact(ax, ay, yaw_rate, dt, flail_x, flail_y)
     return OccupantRisk(
         t_impact=t0 + t_impact,
         oiv_x=oiv[0],
@@ -103,7 +107,7 @@ def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
         t_head=t0 + t_head,
         thiv=thiv,
         phd=post_impact_head_deceleration(ax, ay, dt, t_head),
-        asi=jnp.max(asi_history(ax, ay, az, dt, edition)),
+        asi=jnp.max(asi_history(ax, ay, az, dt, edition)),  # az None: two channels
         impact_in_record=in_record,
         head_impact_in_record=head_in_record,
     )
@@ -150,18 +154,16 @@ def occupant_risk(
         raise ValueError(f"asi_edition must be one of {EDITIONS}; got {asi_edition!r}")
     dt = sampling_step(t)
     t0 = float(np.asarray(t, dtype=float)[0])
-    zeros = jnp.zeros(np.shape(t))
-    channels = {
-        "ax": ax,
-        "ay": ay,
-        "yaw_rate": zeros if yaw_rate is None else yaw_rate,
-        "az": zeros if az is None else az,
-    }
+    given = {"ax": ax, "ay": ay, "yaw_rate": yaw_rate, "az": az}
+    channels = {name: x for name, x in given.items() if x is not None}
     for name, x in channels.items():
         if np.shape(x)[-1:] != np.shape(t):
             raise ValueError(f"{name} must have the samples of t on its last axis ({len(t)}); got shape {np.shape(x)}")
     channels = {name: _finite(name, jnp.asarray(x, dtype=float)) for name, x in channels.items()}
     shape = jnp.broadcast_shapes(*(x.shape for x in channels.values()))
-    flat = [jnp.broadcast_to(x, shape).reshape(-1, shape[-1]) for x in channels.values()]
-    risk = _records(*flat, jnp.asarray(flail_x, float), jnp.asarray(flail_y, float), dt=dt, t0=t0, edition=asi_edition)
+    flat = {name: jnp.broadcast_to(x, shape).reshape(-1, shape[-1]) for name, x in channels.items()}
+    flail = jnp.asarray(flail_x, float), jnp.asarray(flail_y, float)
+    risk = _records(
+        flat["ax"], flat["ay"], flat.get("yaw_rate"), flat.get("az"), *flail, dt=dt, t0=t0, edition=asi_edition
+    )
     return jax.tree.map(lambda leaf: leaf.reshape(shape[:-1]), risk)

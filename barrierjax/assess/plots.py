@@ -63,9 +63,7 @@ def flail_space_figure(record, risk) -> Figure:
 
 def asi_figure(record, risk, asi_edition: str = "2010") -> Figure:
     """ASI(t), its maximum and the EN 1317-2 class bounds."""
-    zeros = np.zeros_like(record.t)
-    az = zeros if record.az is None else record.az
-    history = np.asarray(asi_history(record.ax, record.ay, az, record.dt, asi_edition))
+    history = np.asarray(asi_history(record.ax, record.ay, record.az, record.dt, asi_edition))
     fig = Figure(figsize=(8, 4), layout="constrained")
     ax = fig.add_subplot()
     ax.plot(record.t * _MS, history, color="C0", label=f"ASI(t), EN 1317-1:{asi_edition}")
