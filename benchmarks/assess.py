@@ -6,7 +6,8 @@ second, batched, beside a per-record NumPy/scipy loop written the way a test hou
 Records: 1 s at 10 kHz (10 001 samples), a half-sine pulse on ax (5 to 25 g, 40 to 200 ms),
 ay a random fraction of it, a yaw rate, no az: every metric computed (flail space OIV and
 ORA, THIV and PHD with the yaw, ASI 2010 with its 13 Hz filter on 0.5 s padding). barrierjax:
-`occupant_risk` on chunks of records (one compiled executable), 1e5 records (--quick: 2e3;
+`occupant_risk` on chunks of 200 records (one compiled executable; larger chunks run slower
+here, out of cache), 1e5 records (--quick: 2e3;
 four distinct chunks of random records taken in turn, to bound the memory).
 The loop: for each record, scipy.signal's butter and filtfilt for the ASI, np.cumsum
 trapezoids for the occupant, the first sample past the flail distance with linear
@@ -105,7 +106,7 @@ def loop_record(ax, ay, yaw):
 def main():
     args = argument_parser(__doc__).parse_args()
     n_records = 2_000 if args.quick else 100_000
-    chunk = 500 if args.quick else 2_000
+    chunk = 200
     n_loop = 50 if args.quick else 500
     # Four distinct chunks, taken in turn (1e5 records at once would be 24 GB of float64).
     chunks = [records(chunk, args.seed + i) for i in range(4)]

@@ -127,18 +127,32 @@ def zero_padded_lowpass(x, dt, f_design, *, pad_seconds: float):
     zeros at each end (EN 1317-1:2010's ASI), computed in the frequency domain: on a
     zero-padded record the two passes from rest are the linear, time-invariant filter whose
     gain is `filter_gain` (|H|^2, real: no phase), applied here by FFT to the padded record
-    (its length rounded up to a power of two with further zeros). Equal to the recursion
+    (its length rounded up to a product of 2, 3 and 5 with further zeros). Equal to the recursion
     to the rounding while the padding is long against the filter's decay (0.5 s against
     1 / 13 Hz for the ASI: e^-29; tests/test_assess.py checks it against scipy's filtfilt),
     and without its per-sample sequential loop."""
     x = jnp.asarray(x)
     n = x.shape[-1]
     n_pad = _pad_samples(dt, pad_seconds)
-    length = 1 << int(math.ceil(math.log2(n + 2 * n_pad)))
+    length = _fast_length(n + 2 * n_pad)
     frequencies = np.fft.rfftfreq(length, dt)
     spectrum = jnp.fft.rfft(x, n=length, axis=-1)
     spectrum = spectrum * jnp.asarray(filter_gain(frequencies, dt, f_design), dtype=spectrum.dtype)
     return jnp.fft.irfft(spectrum, n=length, axis=-1)[..., :n]
+
+
+def _fast_length(n: int) -> int:
+    """The smallest 2^a 3^b 5^c >= n: an FFT length without large prime factors."""
+    best = 1 << int(math.ceil(math.log2(n)))
+    power5 = 1
+    while power5 < best:
+        power35 = power5
+        while power35 < best:
+            length = power35 << max(0, int(math.ceil(math.log2(n / power35))))
+            best = min(best, length)
+            power35 *= 3
+        power5 *= 5
+    return best
 
 
 def filter_gain(f, dt, f_design):
