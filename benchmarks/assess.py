@@ -118,7 +118,7 @@ def main():
     start = time.perf_counter()
     risks = [jax.block_until_ready(batched(*chunks[i % 4])) for i in range(n_records // chunk)]
     jax_time = time.perf_counter() - start
-    ax, ay, yaw = chunks[0]
+    ax, ay, yaw = (np.concatenate(channel) for channel in zip(*chunks))  # the 800 records
     start = time.perf_counter()
     reference = [loop_record(ax[i], ay[i], yaw[i]) for i in range(n_loop)]
     loop_time = time.perf_counter() - start
