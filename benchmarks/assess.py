@@ -79,7 +79,7 @@ def _first_of(t, d, v, limits):
 
 def loop_record(ax, ay, yaw):
     """Every metric of one record, in NumPy and scipy."""
-    cum = lambda a: np.concatenate([[0.0], np.cumsum(0.5 * DT * (a[1:] + a[:-1]))])  # noqa: E731
+    cum = lambda a: np.concatenate([[0.0], np.cumsum(0.5 * DT * (a[1:] + a[:-1]))])
     v = -np.stack([cum(ax), cum(ay)], 1)
     d = np.stack([cum(v[:, 0]), cum(v[:, 1])], 1)
     t_impact, oiv = _first_of(T, d, v, (0.6, 0.3))
@@ -94,7 +94,10 @@ def loop_record(ax, ay, yaw):
     t_head, relative = _first_of(T, np.stack([hx, hy], 1), np.stack([ux, uy], 1), (0.6, 0.3))
     b, a = scipy.signal.butter(2, 13.0, fs=1 / DT)
     pad = np.zeros(5000)
-    filtered = [scipy.signal.filtfilt(b, a, np.concatenate([pad, x, pad]), padtype=None)[5000:-5000] for x in (ax, ay)]
+    filtered = [
+        scipy.signal.filtfilt(b, a, np.concatenate([pad, x, pad]), padtype=None)[5000:-5000]
+        for x in (ax, ay)
+    ]
     asi = np.max(np.sqrt((filtered[0] / (12 * G)) ** 2 + (filtered[1] / (9 * G)) ** 2))
     return dict(
         t_impact=t_impact, oiv_x=oiv[0], oiv_y=oiv[1],
@@ -124,20 +127,39 @@ def main():
     loop_time = time.perf_counter() - start
 
     differences = {  # relative to the metric's largest value over the 20 records
-        name: max(abs(float(getattr(risks[0], name)[i]) - r[name]) for i, r in enumerate(reference[:20]))
+        name: max(
+            abs(float(getattr(risks[0], name)[i]) - r[name]) for i, r in enumerate(reference[:20])
+        )
         / max(abs(r[name]) for r in reference[:20])
         for name in METRICS
     }
     jax_rate, loop_rate = n_records / jax_time, n_loop / loop_time
     rows = [
-        dict(method=f"barrierjax occupant_risk, chunks of {chunk}", records=n_records, seconds=jax_time, rate=jax_rate, ratio=jax_rate / loop_rate),
-        dict(method="NumPy/scipy loop, one record at a time", records=n_loop, seconds=loop_time, rate=loop_rate, ratio=1.0),
+        dict(
+            method=f"barrierjax occupant_risk, chunks of {chunk}",
+            records=n_records,
+            seconds=jax_time,
+            rate=jax_rate,
+            ratio=jax_rate / loop_rate,
+        ),
+        dict(
+            method="NumPy/scipy loop, one record at a time",
+            records=n_loop,
+            seconds=loop_time,
+            rate=loop_rate,
+            ratio=1.0,
+        ),
     ]
     table(
         "Occupant risk of 1 s records at 10 kHz (every metric): steady state",
         rows,
-        [("method", "method", "s"), ("records", "records", "d"), ("s", "seconds", ".2f"),
-         ("records/s", "rate", ".0f"), ("x the loop", "ratio", ".1f")],
+        [
+            ("method", "method", "s"),
+            ("records", "records", "d"),
+            ("s", "seconds", ".2f"),
+            ("records/s", "rate", ".0f"),
+            ("x the loop", "ratio", ".1f"),
+        ],
     )
     table(
         "barrierjax against the loop on 20 records (max difference over the largest value: "

@@ -58,7 +58,9 @@ def test_no_motion_gives_no_impact_and_no_nan():
     zeros = np.zeros_like(T)
     r = occupant_risk(T, zeros, zeros)
     assert np.isinf(r.t_impact) and np.isinf(r.t_head)
-    values = [float(getattr(r, f)) for f in ("oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi")]
+    values = [
+        float(getattr(r, f)) for f in ("oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi")
+    ]
     assert values == [0.0] * 7
     assert not bool(r.impact_in_record)
     grad = jax.grad(lambda s: occupant_risk(T, s * zeros, zeros).oiv_x)(1.0)
@@ -150,7 +152,9 @@ def test_filtered_record_equals_scipy_filtfilt():
         design = filters.J211_DESIGN_FACTOR * cfc
         b, a = scipy.signal.butter(2, design, fs=1 / DT)
         expected = scipy.signal.filtfilt(b, a, x, padtype="odd", padlen=n_pad)
-        np.testing.assert_allclose(filters.cfc_filter(x, DT, cfc), expected, rtol=0, atol=1e-9 * np.ptp(x))
+        np.testing.assert_allclose(
+            filters.cfc_filter(x, DT, cfc), expected, rtol=0, atol=1e-9 * np.ptp(x)
+        )
     b, a = scipy.signal.butter(2, 13.0, fs=1 / DT)
     padded = np.concatenate([np.zeros(5000), x, np.zeros(5000)])
     expected = scipy.signal.filtfilt(b, a, padded, padtype=None)[5000:-5000]

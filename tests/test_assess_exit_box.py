@@ -8,8 +8,8 @@ import pytest
 
 import barrierjax as bj
 from barrierjax import scene_file
-from barrierjax.assess.exit_box import exit_box_check, result_exit_box
 from barrierjax.assess import matrices
+from barrierjax.assess.exit_box import exit_box_check, result_exit_box
 from barrierjax.assess.matrices import EXIT_BOXES, mash_exit_box
 
 

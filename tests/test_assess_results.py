@@ -16,7 +16,9 @@ BARRIER = bj.Barrier(plastic_moment=105e3, mass_per_length=34.0, backing_strengt
 def crushing_scene(crush_force=150e3, speed=40 / 3.6):
     """A crush force below the barrier's collapse load: the barrier stays put and the
     vehicle decelerates at P0 / M throughout (report 3.2's rigid-barrier limit)."""
-    return bj.Scene(BARRIER, bj.Vehicle(mass=2270.0, crush_force=crush_force), bj.Impact(speed=speed))
+    return bj.Scene(
+        BARRIER, bj.Vehicle(mass=2270.0, crush_force=crush_force), bj.Impact(speed=speed)
+    )
 
 
 def test_rigid_barrier_limit_is_the_constant_deceleration_closed_form():
@@ -55,7 +57,9 @@ def test_vehicle_stopped_within_the_flail_space_gives_the_impact_speed():
     assert float(risk.oiv_x) == pytest.approx(v0, rel=1e-9)
     moved = v0 * float(result.duration) - stop
     assert moved < 0.6
-    assert float(risk.t_impact) == pytest.approx(float(result.duration) + (0.6 - moved) / v0, rel=1e-3)
+    assert float(risk.t_impact) == pytest.approx(
+        float(result.duration) + (0.6 - moved) / v0, rel=1e-3
+    )
     assert float(risk.ora_x) == 0.0
 
 
@@ -69,7 +73,9 @@ def test_oblique_oiv_is_the_history_velocity_change_on_the_vehicle_axes():
     t = float(risk.t_impact)
     angle = np.radians(float(scene.impact.angle_deg))
     dn = float(h.vehicle_velocity[0]) - np.interp(t, h.time, h.vehicle_velocity)
-    ds = float(h.vehicle_tangential_velocity[0]) - np.interp(t, h.time, h.vehicle_tangential_velocity)
+    ds = float(h.vehicle_tangential_velocity[0]) - np.interp(
+        t, h.time, h.vehicle_tangential_velocity
+    )
     assert float(risk.oiv_x) == pytest.approx(np.sin(angle) * dn + np.cos(angle) * ds, rel=1e-3)
     assert float(risk.oiv_y) == pytest.approx(-np.cos(angle) * dn + np.sin(angle) * ds, rel=1e-3)
     assert bool(risk.impact_in_record)
@@ -86,7 +92,9 @@ def test_batched_results_equal_each_member():
     for i, v in enumerate(speeds):
         single = assess(bj.simulate(crushing_scene(speed=float(v))), t_end=t_end)
         for name in ("oiv_x", "ora_x", "asi", "t_impact"):
-            assert float(getattr(batched, name)[i]) == pytest.approx(float(getattr(single, name)), rel=1e-9), name
+            assert float(getattr(batched, name)[i]) == pytest.approx(
+                float(getattr(single, name)), rel=1e-9
+            ), name
 
 
 def test_axial_result_is_assessed():

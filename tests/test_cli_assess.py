@@ -53,7 +53,9 @@ def test_record_in_g_and_ms_gives_the_numbers_in_si(tmp_path):
 
 
 def test_assess_json_is_si_and_equals_the_library(capsys, tmp_path):
-    status, out, err = run(capsys, "assess", si_record(tmp_path), "--json", "--cfc", "0", "--no-plots")
+    status, out, err = run(
+        capsys, "assess", si_record(tmp_path), "--json", "--cfc", "0", "--no-plots"
+    )
     data = json.loads(out)
     risk = occupant_risk(T, AX, AY, YAW)
     for name in ("t_impact", "oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi"):
@@ -65,7 +67,9 @@ def test_assess_json_is_si_and_equals_the_library(capsys, tmp_path):
 
 def test_assess_summary_plots_and_failing_verdict(capsys, tmp_path):
     strong = write_record(tmp_path / "strong.csv", ["t", "ax", "ay"], [T, 2 * AX, AY])
-    status, out, err = run(capsys, "assess", strong, "--standard", "en1317", "--out", tmp_path / "plots")
+    status, out, err = run(
+        capsys, "assess", strong, "--standard", "en1317", "--out", tmp_path / "plots"
+    )
     assert status == 1  # ASI 3.0 > 1.9 and THIV > 33 km/h
     assert "EN 1317: FAIL" in out and "ASI" in out and "THIV" in out and "informative" in out
     for name in ("accelerations.png", "flail_space.png", "asi.png"):
@@ -76,7 +80,9 @@ def test_record_too_short_for_the_occupant_impact(capsys, tmp_path):
     short = write_record(tmp_path / "short.csv", ["t", "ax", "ay"], [T[:500], AX[:500], AY[:500]])
     status, out, err = run(capsys, "assess", short)
     assert status == 2 and out == ""
-    assert err.startswith("error: ") and "OIV undefined" in err and len(err.strip().splitlines()) == 1
+    assert (
+        err.startswith("error: ") and "OIV undefined" in err and len(err.strip().splitlines()) == 1
+    )
 
 
 @pytest.mark.parametrize(
@@ -85,7 +91,10 @@ def test_record_too_short_for_the_occupant_impact(capsys, tmp_path):
         ("", "the file is empty"),
         ("t,ax\n0,1\n", "missing column 'ay'"),
         ("t [furlongs],ax,ay\n0,0,0\n1,0,0\n2,0,0\n", "column 't': unit 'furlongs' is not"),
-        ("t [parsec],ax,ay\n0,0,0\n1,0,0\n2,0,0\n", "column 't': unit 'parsec' is not a unit of time"),
+        (
+            "t [parsec],ax,ay\n0,0,0\n1,0,0\n2,0,0\n",
+            "column 't': unit 'parsec' is not a unit of time",
+        ),
         ("t,ax [furlongs],ay\n0,0,0\n1,0,0\n2,0,0\n", "is not a unit of acceleration"),
         ("t,ax [blorg],ay\n0,0,0\n1,0,0\n2,0,0\n", "column 'ax': unknown unit 'blorg'"),
         ("t,ax,ay\n0,0,0\n1,nan,0\n2,0,0\n", "row 3, column 'ax': nan is not finite"),
@@ -122,20 +131,46 @@ _CELLS = st.one_of(
     st.text(max_size=6),
 )
 _HEADERS = st.lists(
-    st.sampled_from(["t", "ax", "ay", "az", "yaw_rate", "t [ms]", "ax [g]", "ay [zz]", "t [m]", "x", "", "ax [", "t [s]"]),
+    st.sampled_from(
+        [
+            "t",
+            "ax",
+            "ay",
+            "az",
+            "yaw_rate",
+            "t [ms]",
+            "ax [g]",
+            "ay [zz]",
+            "t [m]",
+            "x",
+            "",
+            "ax [",
+            "t [s]",
+        ]
+    ),
     min_size=0,
     max_size=6,
 )
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(header=_HEADERS, rows=st.lists(st.lists(_CELLS, max_size=6), max_size=8), raw=st.binary(max_size=40))
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    header=_HEADERS,
+    rows=st.lists(st.lists(_CELLS, max_size=6), max_size=8),
+    raw=st.binary(max_size=40),
+)
 def test_fuzzed_records_give_one_line_never_a_traceback(tmp_path, header, rows, raw):
     """Random headers, cells and bytes: the reader either reads the record or raises
     RecordError with one line; nothing else escapes."""
     path = tmp_path / "fuzz.csv"
     text = "\n".join([",".join(header)] + [",".join(row) for row in rows])
-    for content in (text.encode("utf-8", "surrogatepass"), raw, text.encode("utf-8", "surrogatepass") + raw):
+    for content in (
+        text.encode("utf-8", "surrogatepass"),
+        raw,
+        text.encode("utf-8", "surrogatepass") + raw,
+    ):
         path.write_bytes(content)
         try:
             record = read_record(path)

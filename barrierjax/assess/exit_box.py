@@ -14,7 +14,6 @@ the barrier's face at contact, moving with the point.
 
 import equinox as eqx
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from . import matrices
@@ -38,12 +37,17 @@ def exit_box_check(along, offset, width_a, length_b) -> ExitBoxCheck:
     a box A = `width_a` by B = `length_b` (m). Differentiable in the path and the box."""
     along, offset = jnp.asarray(along), jnp.asarray(offset)
     if along.shape != offset.shape or along.ndim != 1 or along.shape[0] < 2:
-        raise ValueError(f"along and offset must be 1-D paths of the same length >= 2; got {along.shape}, {offset.shape}")
+        raise ValueError(
+            f"along and offset must be 1-D paths of the same length >= 2; got {along.shape}, {offset.shape}"
+        )
     travelled = along - along[0]
     slope = (offset[-1] - offset[-2]) / (along[-1] - along[-2])
     at_end = offset[-1] + slope * jnp.maximum(length_b - travelled[-1], 0.0)
     inside = travelled <= length_b
-    largest = jnp.maximum(jnp.max(jnp.where(inside, offset, -jnp.inf)), jnp.where(travelled[-1] < length_b, at_end, -jnp.inf))
+    largest = jnp.maximum(
+        jnp.max(jnp.where(inside, offset, -jnp.inf)),
+        jnp.where(travelled[-1] < length_b, at_end, -jnp.inf),
+    )
     return ExitBoxCheck(passed=largest <= width_a, largest_offset=largest, margin=width_a - largest)
 
 
@@ -55,11 +59,15 @@ def result_exit_box(result, vehicle_length, vehicle_width, box: str = "MASH") ->
         raise ValueError(f"box must be one of {', '.join(matrices.EXIT_BOXES)}; got {box!r}")
     history = result.history
     if history is None:
-        raise ValueError("result_exit_box: the result has no history: simulate(scene, n_history>=2)")
+        raise ValueError(
+            "result_exit_box: the result has no history: simulate(scene, n_history>=2)"
+        )
     spec = matrices.EXIT_BOXES[box]
     width_a = spec.offset + vehicle_width + spec.length_factor * vehicle_length
     exit_offset = vehicle_width - history.vehicle_displacement[-1]
     rise = spec.downstream * jnp.tan(jnp.radians(result.exit_angle_deg))
     start = history.vehicle_position[-1]
     along = jnp.stack([start, start + spec.downstream])
-    return exit_box_check(along, jnp.stack([exit_offset, exit_offset + rise]), width_a, spec.downstream)
+    return exit_box_check(
+        along, jnp.stack([exit_offset, exit_offset + rise]), width_a, spec.downstream
+    )

@@ -92,7 +92,7 @@ def _reflected(x, n_pad: int):
 
 
 def _pad_samples(dt, pad_seconds: float) -> int:
-    return int(math.ceil(pad_seconds / float(dt) - 1e-9))
+    return math.ceil(pad_seconds / float(dt) - 1e-9)
 
 
 def phaseless_lowpass(x, dt, f_design, *, pad_seconds: float = CFC_PAD_SECONDS):
@@ -143,12 +143,12 @@ def zero_padded_lowpass(x, dt, f_design, *, pad_seconds: float):
 
 def _fast_length(n: int) -> int:
     """The smallest 2^a 3^b 5^c >= n: an FFT length without large prime factors."""
-    best = 1 << int(math.ceil(math.log2(n)))
+    best = 1 << math.ceil(math.log2(n))
     power5 = 1
     while power5 < best:
         power35 = power5
         while power35 < best:
-            length = power35 << max(0, int(math.ceil(math.log2(n / power35))))
+            length = power35 << max(0, math.ceil(math.log2(n / power35)))
             best = min(best, length)
             power35 *= 3
         power5 *= 5

@@ -79,7 +79,9 @@ def sampling_step(t) -> float:
         raise ValueError(f"t must be strictly increasing (sample {int(np.argmax(steps <= 0)) + 1})")
     dt = (t[-1] - t[0]) / (t.size - 1)
     if np.max(np.abs(steps - dt)) > 1e-6 * dt:
-        raise ValueError(f"t must be uniformly sampled (steps from {steps.min():g} to {steps.max():g} s)")
+        raise ValueError(
+            f"t must be uniformly sampled (steps from {steps.min():g} to {steps.max():g} s)"
+        )
     return float(dt)
 
 
@@ -88,7 +90,6 @@ def _records(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
     """`_one_record` over the leading axis: one executable per record length and step."""
     one = functools.partial(_one_record, dt=dt, t0=t0, edition=edition)
     return jax.vmap(one, in_axes=(0, 0, 0, 0, None, None))(ax, ay, yaw_rate, az, flail_x, flail_y)
-
 
 
 def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
@@ -158,12 +159,21 @@ def occupant_risk(
     channels = {name: x for name, x in given.items() if x is not None}
     for name, x in channels.items():
         if np.shape(x)[-1:] != np.shape(t):
-            raise ValueError(f"{name} must have the samples of t on its last axis ({len(t)}); got shape {np.shape(x)}")
+            raise ValueError(
+                f"{name} must have the samples of t on its last axis ({len(t)}); got shape {np.shape(x)}"
+            )
     channels = {name: _finite(name, jnp.asarray(x, dtype=float)) for name, x in channels.items()}
     shape = jnp.broadcast_shapes(*(x.shape for x in channels.values()))
     flat = {name: jnp.broadcast_to(x, shape).reshape(-1, shape[-1]) for name, x in channels.items()}
     flail = jnp.asarray(flail_x, float), jnp.asarray(flail_y, float)
     risk = _records(
-        flat["ax"], flat["ay"], flat.get("yaw_rate"), flat.get("az"), *flail, dt=dt, t0=t0, edition=asi_edition
+        flat["ax"],
+        flat["ay"],
+        flat.get("yaw_rate"),
+        flat.get("az"),
+        *flail,
+        dt=dt,
+        t0=t0,
+        edition=asi_edition,
     )
     return jax.tree.map(lambda leaf: leaf.reshape(shape[:-1]), risk)

@@ -32,7 +32,13 @@ def accelerations_figure(record, risk, asi_edition: str = "2010") -> Figure:
         ax.plot(t, smooth / G, color=color, lw=1.6, label=f"{name}, as the ASI reads it")
     for when, label in ((risk.t_impact, "occupant impact"), (risk.t_head, "head impact")):
         if np.isfinite(when):
-            ax.axvline(float(when) * _MS, color="0.4", ls="--" if "occupant" in label else ":", lw=1, label=label)
+            ax.axvline(
+                float(when) * _MS,
+                color="0.4",
+                ls="--" if "occupant" in label else ":",
+                lw=1,
+                label=label,
+            )
     ax.set(xlabel="time (ms)", ylabel="acceleration (g)", title="Vehicle accelerations")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
@@ -50,11 +56,22 @@ def flail_space_figure(record, risk) -> Figure:
     box = Rectangle((-FLAIL_Y, -FLAIL_X), 2 * FLAIL_Y, 2 * FLAIL_X, fill=False, ec="0.3", ls="--")
     box.set_label("flail space (0.6 m, 0.3 m)")
     ax.add_patch(box)
-    ax.plot(-position[before, 1], position[before, 0], color="C0", label="occupant, relative to the vehicle")
+    ax.plot(
+        -position[before, 1],
+        position[before, 0],
+        color="C0",
+        label="occupant, relative to the vehicle",
+    )
     if np.isfinite(t_impact):
         x, y = float(position[before, 0][-1]), float(position[before, 1][-1])
-        ax.plot(-y, x, "o", color="C3", label=f"impact at {t_impact * _MS:.1f} ms: "
-                f"OIV {abs(float(risk.oiv_x)):.2f} m/s x, {abs(float(risk.oiv_y)):.2f} m/s y")
+        ax.plot(
+            -y,
+            x,
+            "o",
+            color="C3",
+            label=f"impact at {t_impact * _MS:.1f} ms: "
+            f"OIV {abs(float(risk.oiv_x)):.2f} m/s x, {abs(float(risk.oiv_y)):.2f} m/s y",
+        )
     ax.set(xlabel="to the right (m)", ylabel="forward (m)", aspect="equal", title="Flail space")
     ax.grid(alpha=0.3)
     fig.legend(fontsize=8, loc="outside lower center")

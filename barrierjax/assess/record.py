@@ -93,7 +93,7 @@ def _unit_factor(column: str, unit: str | None) -> float:
     name = "standard_gravity" if unit in _GRAVITY and kind == "acceleration" else unit
     try:
         quantity = registry.Quantity(1.0, name)
-    except Exception:  # pint raises several types for a string it cannot parse
+    except Exception:  # noqa: BLE001 - pint raises several types for a string it cannot parse
         raise RecordError(f"column '{column}': unknown unit '{unit}'") from None
     if not quantity.check(dimension):
         raise RecordError(f"column '{column}': unit '{unit}' is not a unit of {kind} (e.g. {si})")
@@ -109,7 +109,9 @@ def _header(row: list[str]) -> dict[str, tuple[int, str | None]]:
             if not cell.strip():
                 raise RecordError(f"header: column {position + 1} has no name")
             if "[" in cell and "]" not in cell:
-                raise RecordError(f"header: column '{cell.strip()}' has an unclosed '[' in its unit")
+                raise RecordError(
+                    f"header: column '{cell.strip()}' has an unclosed '[' in its unit"
+                )
             continue  # a channel of another name style: not one of ours
         name, unit = match.group(1), match.group(2)
         if name in COLUMNS:
@@ -134,7 +136,9 @@ def _values(rows: list[list[str]], name: str, position: int) -> np.ndarray:
         try:
             values[i] = float(row[position])
         except ValueError:
-            raise RecordError(f"row {line}, column '{name}': {row[position].strip()!r} is not a number") from None
+            raise RecordError(
+                f"row {line}, column '{name}': {row[position].strip()!r} is not a number"
+            ) from None
         if not math.isfinite(values[i]):
             raise RecordError(f"row {line}, column '{name}': {row[position].strip()} is not finite")
     return values

@@ -18,6 +18,7 @@ import math
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.core import Tracer
 
 from .occupant import OccupantRisk, occupant_risk
 
@@ -27,20 +28,23 @@ ASSESS_STEP = 1e-4  # s: the uniform grid's step (10 kHz)
 
 
 def _duration(history) -> float:
-    try:
-        return float(np.max(np.asarray(history.time)))
-    except Exception:  # a traced result: jax raises its own error types here
-        raise ValueError("assess: t_end must be given for a traced result (under jit or grad)") from None
+    if isinstance(history.time, Tracer):
+        raise ValueError("assess: t_end must be given for a traced result (under jit or grad)")
+    return float(np.max(np.asarray(history.time)))
 
 
 def vehicle_record(history, *, dt: float = ASSESS_STEP, t_end: float | None = None):
     """(t, ax, ay) of one result's `history`: the vehicle's accelerations on its own axes
     (x forward, y left), m/s^2, at uniform times `t` (step `dt`) from contact to `t_end`
     (default: the history's end, which must then be concrete). Differentiable."""
+    t = _grid(history, dt, t_end)
+    velocities = history.time, history.vehicle_velocity, history.vehicle_tangential_velocity
+    return (t, *_vehicle_axes(*velocities, t, dt))
+
+
+def _grid(history, dt: float, t_end: float | None) -> np.ndarray:
     t_end = _duration(history) if t_end is None else float(t_end)
-    n = max(int(math.ceil(t_end / dt - 1e-9)) + 1, 3)
-    t = dt * np.arange(n)
-    return (t, *_vehicle_axes(history.time, history.vehicle_velocity, history.vehicle_tangential_velocity, t, dt))
+    return dt * np.arange(max(math.ceil(t_end / dt - 1e-9) + 1, 3))
 
 
 @functools.partial(jax.jit, static_argnames="dt")
@@ -56,23 +60,21 @@ def _vehicle_axes(time, normal_velocity, tangential_velocity, t, dt):
     return forward, left
 
 
-def assess(result, *, dt: float = ASSESS_STEP, t_end: float | None = None, asi_edition: str = "2010") -> OccupantRisk:
+def assess(
+    result, *, dt: float = ASSESS_STEP, t_end: float | None = None, asi_edition: str = "2010"
+) -> OccupantRisk:
     """The occupant risk (`OccupantRisk`) of a `simulate` result with a history (a normal,
-    oblique or axial impact; batched results are assessed member by member, on a grid to
-    the longest history's end)."""
+    oblique or axial impact), on a uniform grid of step `dt` to `t_end` (default: the
+    history's end; a batch's longest). Under `jit` or `grad` give `t_end`."""
     history = result.history
     if history is None:
         raise ValueError("assess: the result has no history: simulate(scene, n_history>=2)")
+    t = _grid(history, dt, t_end)
     batch = np.shape(history.time)[:-1]
-    t_end = _duration(history) if t_end is None else t_end
-    if not batch:
-        t, ax, ay = vehicle_record(history, dt=dt, t_end=t_end)
-        return occupant_risk(t, ax, ay, asi_edition=asi_edition)
-    records = [
-        vehicle_record(jax.tree.map(lambda leaf, i=index: leaf[i], history), dt=dt, t_end=t_end)
-        for index in np.ndindex(*batch)
+    velocities = [
+        jnp.reshape(v, (-1, v.shape[-1]))
+        for v in (history.time, history.vehicle_velocity, history.vehicle_tangential_velocity)
     ]
-    t = records[0][0]
-    ax = jnp.stack([r[1] for r in records]).reshape(*batch, -1)
-    ay = jnp.stack([r[2] for r in records]).reshape(*batch, -1)
+    axes = jax.vmap(_vehicle_axes, in_axes=(0, 0, 0, None, None))(*velocities, t, dt)
+    ax, ay = (a.reshape(*batch, t.size) for a in axes)
     return occupant_risk(t, ax, ay, asi_edition=asi_edition)

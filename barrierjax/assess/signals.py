@@ -66,8 +66,18 @@ def hermite_at(position, velocity, dt):
         i, s = _interval(tau, dt, n)
         u = s / dt
         p0, p1, v0, v1 = position[i], position[i + 1], dt * velocity[i], dt * velocity[i + 1]
-        h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-        dh00, dh10, dh01, dh11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, 3 * u**2 - 2 * u
+        h00, h10, h01, h11 = (
+            2 * u**3 - 3 * u**2 + 1,
+            u**3 - 2 * u**2 + u,
+            -2 * u**3 + 3 * u**2,
+            u**3 - u**2,
+        )
+        dh00, dh10, dh01, dh11 = (
+            6 * u**2 - 6 * u,
+            3 * u**2 - 4 * u + 1,
+            -6 * u**2 + 6 * u,
+            3 * u**2 - 2 * u,
+        )
         p = h00 * p0 + h10 * v0 + h01 * p1 + h11 * v1
         dp = (dh00 * p0 + dh10 * v0 + dh01 * p1 + dh11 * v1) / dt
         beyond = jnp.maximum(tau - (n - 1) * dt, 0.0)

@@ -59,7 +59,10 @@ def judge(risk, standard: str = "mash") -> list[Criterion]:
     if standard not in OCCUPANT_LIMITS:
         raise ValueError(f"standard must be one of {', '.join(OCCUPANT_LIMITS)}; got {standard!r}")
     limits = OCCUPANT_LIMITS[standard]
-    value = {name: float(np.asarray(getattr(risk, name))) for name in ("oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi")}
+    value = {
+        name: float(np.asarray(getattr(risk, name)))
+        for name in ("oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi")
+    }
     if standard in ("mash", "nchrp350"):
         return [
             _against(limits["OIV"], "OIV x", abs(value["oiv_x"])),

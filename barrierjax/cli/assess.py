@@ -27,7 +27,9 @@ def conditioned(record, cfc):
     def through(x):
         return None if x is None else np.asarray(filters.cfc_filter(x, record.dt, cfc))
 
-    return dataclasses.replace(record, ax=through(record.ax), ay=through(record.ay), az=through(record.az))
+    return dataclasses.replace(
+        record, ax=through(record.ax), ay=through(record.ay), az=through(record.az)
+    )
 
 
 def assessment_dict(path, record, risk, criteria, *, standard, cfc, asi_edition) -> dict:
@@ -53,19 +55,27 @@ def assessment_dict(path, record, risk, criteria, *, standard, cfc, asi_edition)
 def _limit(value, unit):
     if value is None:
         return "-"
-    return f"{value / 9.80665:.2f} g" if unit == "m/s^2" else f"{value:.2f} {unit}".replace(" 1", "")
+    return (
+        f"{value / 9.80665:.2f} g" if unit == "m/s^2" else f"{value:.2f} {unit}".replace(" 1", "")
+    )
 
 
 def format_assessment(data: dict) -> str:
     """A readable table of `assessment_dict(...)`: every metric, then the criteria."""
     g = 9.80665
     lines = [
-        f"Record: {data['record']} ({data['samples']} samples at {data['sampling_rate_Hz']:.0f} Hz, "
-        f"accelerations {data['filter']})",
+        (
+            f"Record: {data['record']} ({data['samples']} samples at "
+            f"{data['sampling_rate_Hz']:.0f} Hz, accelerations {data['filter']})"
+        ),
         "",
         "Occupant risk",
         f"  occupant impact (flail space)   {data['t_impact'] * 1e3:9.1f} ms"
-        + ("" if data["impact_in_record"] else "   (after the record: the vehicle taken unaccelerated)"),
+        + (
+            ""
+            if data["impact_in_record"]
+            else "   (after the record: the vehicle taken unaccelerated)"
+        ),
         f"  OIV x, y                        {data['oiv_x']:9.2f} {data['oiv_y']:9.2f} m/s",
         f"  ORA x, y                        {data['ora_x'] / g:9.2f} {data['ora_y'] / g:9.2f} g",
         f"  head impact                     {data['t_head'] * 1e3:9.1f} ms",
@@ -98,9 +108,13 @@ def assess_command(args) -> int:
         raise CommandError(str(error)) from None
     cfc = None if args.cfc == 0 else args.cfc
     if cfc is not None and record.dt * cfc * 2.0775 >= 0.5:
-        raise CommandError(f"--cfc {cfc}: the record's {1 / record.dt:g} Hz sampling is too slow for it")
+        raise CommandError(
+            f"--cfc {cfc}: the record's {1 / record.dt:g} Hz sampling is too slow for it"
+        )
     record = conditioned(record, cfc)
-    risk = occupant_risk(record.t, record.ax, record.ay, record.yaw_rate, record.az, asi_edition=args.asi_edition)
+    risk = occupant_risk(
+        record.t, record.ax, record.ay, record.yaw_rate, record.az, asi_edition=args.asi_edition
+    )
     if not bool(risk.impact_in_record):
         raise CommandError(
             f"{args.record}: OIV undefined: the occupant does not reach the flail space "
@@ -108,8 +122,18 @@ def assess_command(args) -> int:
             f"{record.t[-1] * 1e3:g} ms; a record must run past the occupant impact"
         )
     criteria = judge(risk, args.standard)
-    data = assessment_dict(args.record, record, risk, criteria, standard=args.standard, cfc=cfc, asi_edition=args.asi_edition)
-    plots = [] if args.no_plots else write_assessment_plots(record, risk, args.out, args.asi_edition)
+    data = assessment_dict(
+        args.record,
+        record,
+        risk,
+        criteria,
+        standard=args.standard,
+        cfc=cfc,
+        asi_edition=args.asi_edition,
+    )
+    plots = (
+        [] if args.no_plots else write_assessment_plots(record, risk, args.out, args.asi_edition)
+    )
     data["plots"] = [str(p) for p in plots]
     if args.json:
         print(json.dumps(data, indent=2))
