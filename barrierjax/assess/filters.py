@@ -24,10 +24,11 @@ frequency f_d of one pass (and the padding of the record's ends):
   gives it: -6 dB at 13 Hz. (A CFC-13 reading, f_d = 2.0775 x 13 Hz, passes more.)
 
 The ends: J211-1 Appendix C extends a record by point reflection about each end value before
-filtering (at least 10 ms), and discards the extension after; EN 1317-1:2010 pads the record
-by 0.5 s at each end (here with zeros: the vehicle unaccelerated before and after). Each
-pass starts at rest on its first input value (the steady state of a constant input), as
-`scipy.signal.filtfilt` starts. All functions are pure JAX, differentiable, along the last
+filtering (at least 10 ms), and discards the extension after (`phaseless_lowpass`,
+`cfc_filter`; each pass starts at rest on its first input value, the steady state of a
+constant input, as `scipy.signal.filtfilt` starts); EN 1317-1:2010 pads the record by 0.5 s
+at each end (here with zeros: the vehicle unaccelerated before and after), where the two
+passes are a time-invariant filter applied by FFT (`zero_padded_lowpass`). All functions are pure JAX, differentiable, along the last
 axis of `x`.
 """
 
