@@ -178,3 +178,29 @@ def test_fuzzed_records_give_one_line_never_a_traceback(tmp_path, header, rows, 
             assert "\n" not in str(error) and str(error)
         else:
             assert np.all(np.isfinite(record.ax)) and np.all(np.diff(record.t) > 0)
+
+
+def test_example_record_of_the_oblique_model_reads_back_as_the_model(capsys):
+    """examples/oblique_scene_record.csv (examples/model_record.py: the oblique scene's
+    vehicle accelerations in g and ms, 9 digits) assessed by the command equals `assess`
+    on the model's result."""
+    from pathlib import Path
+
+    import barrierjax as bj
+    from barrierjax.assess import assess
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    status, out, _ = run(
+        capsys,
+        "assess",
+        examples / "oblique_scene_record.csv",
+        "--cfc",
+        "0",
+        "--json",
+        "--no-plots",
+    )
+    data = json.loads(out)
+    risk = assess(bj.simulate(bj.load_scene(examples / "oblique_scene.toml")))
+    assert status == 0
+    for name in ("t_impact", "oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi"):
+        assert data[name] == pytest.approx(float(getattr(risk, name)), rel=1e-6), name
