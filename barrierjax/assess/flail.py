@@ -42,13 +42,8 @@ def flail_space(ax, ay, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y):
     oiv (2,), in_record). Without an impact (the occupant at rest relative to the vehicle
     at the record's end) t_impact is +inf and oiv zero."""
     position, velocity = occupant_motion(ax, ay, dt)
-    (t_x, t_y), (in_x, in_y) = signals.first_crossings(
-        position, velocity, jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)]), dt
-    )
-    t_impact = jnp.minimum(t_x, t_y)
-    finite = jnp.isfinite(t_impact)
-    _, oiv = signals.hermite_at(position, velocity, dt)(jnp.where(finite, t_impact, 0.0))
-    return t_impact, jnp.where(finite, oiv, 0.0), jnp.where(t_x <= t_y, in_x, in_y)
+    limits = jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)])
+    return signals.first_impact(position, velocity, limits, dt)
 
 
 def ridedown(ax, ay, dt, t_impact, window=RIDEDOWN_WINDOW):

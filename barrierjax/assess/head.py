@@ -44,14 +44,9 @@ def head_impact(ax, ay, yaw_rate, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y):
     """(t_head, thiv, in_record) of one record: when the theoretical head strikes and its
     speed relative to the vehicle then (m/s); +inf and zero without an impact."""
     position, velocity = head_motion(ax, ay, yaw_rate, dt)
-    (t_x, t_y), (in_x, in_y) = signals.first_crossings(
-        position, velocity, jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)]), dt
-    )
-    t_head = jnp.minimum(t_x, t_y)
-    finite = jnp.isfinite(t_head)
-    _, relative = signals.hermite_at(position, velocity, dt)(jnp.where(finite, t_head, 0.0))
-    thiv = jnp.where(finite, signals.safe_norm(relative), 0.0)
-    return t_head, thiv, jnp.where(t_x <= t_y, in_x, in_y)
+    limits = jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)])
+    t_head, relative, in_record = signals.first_impact(position, velocity, limits, dt)
+    return t_head, signals.safe_norm(relative), in_record
 
 
 def post_impact_head_deceleration(ax, ay, dt, t_head, window=RIDEDOWN_WINDOW):

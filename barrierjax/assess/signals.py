@@ -18,6 +18,7 @@ __all__ = [
     "cumulative_integrals",
     "first_crossing",
     "first_crossings",
+    "first_impact",
     "hermite_at",
     "integral_at",
     "max_window_mean",
@@ -128,11 +129,21 @@ def first_crossing(position, velocity, limit, dt, newton_steps: int = 6):
     def iterate(_, tau):
         return jnp.clip(newton(tau), lower, jnp.minimum(upper, 1e30))
 
-    bounds = jax.lax.stop_gradient((lower, upper))
-    lower, upper = bounds
+    lower, upper = jax.lax.stop_gradient((lower, upper))
     tau = jax.lax.fori_loop(0, newton_steps, iterate, jax.lax.stop_gradient(guess))
     tau = newton(jax.lax.stop_gradient(tau))
     return jnp.where(never, jnp.inf, tau), in_record
+
+
+def first_impact(position, velocity, limits, dt):
+    """When a 2-D path (samples `position`, `velocity`, (n, 2)) first reaches
+    |component k| = `limits[k]` on either axis: (time, the velocity then (2,), whether
+    within the record); +inf and a zero velocity without an impact."""
+    (t_x, t_y), (in_x, in_y) = first_crossings(position, velocity, limits, dt)
+    t_hit = jnp.minimum(t_x, t_y)
+    finite = jnp.isfinite(t_hit)
+    _, at_hit = hermite_at(position, velocity, dt)(jnp.where(finite, t_hit, 0.0))
+    return t_hit, jnp.where(finite, at_hit, 0.0), jnp.where(t_x <= t_y, in_x, in_y)
 
 
 def max_window_mean(a, dt, window: float, t_from):

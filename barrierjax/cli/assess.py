@@ -5,11 +5,12 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 
 import numpy as np
 
-from .output import EXIT_FAILED, EXIT_OK, CommandError, progress
+from ..assess import filters
+from ..assess.matrices import G
+from .output import EXIT_FAILED, EXIT_OK, CommandError, print_result
 
 __all__ = ["assess_command", "assessment_dict", "format_assessment"]
 
@@ -22,7 +23,6 @@ def conditioned(record, cfc):
     """The record with its acceleration channels through SAE J211 CFC `cfc` (None: as read)."""
     if cfc is None:
         return record
-    from ..assess import filters
 
     def through(x):
         return None if x is None else np.asarray(filters.cfc_filter(x, record.dt, cfc))
@@ -55,14 +55,12 @@ def assessment_dict(path, record, risk, criteria, *, standard, cfc, asi_edition)
 def _limit(value, unit):
     if value is None:
         return "-"
-    return (
-        f"{value / 9.80665:.2f} g" if unit == "m/s^2" else f"{value:.2f} {unit}".replace(" 1", "")
-    )
+    return f"{value / G:.2f} g" if unit == "m/s^2" else f"{value:.2f} {unit}".replace(" 1", "")
 
 
 def format_assessment(data: dict) -> str:
     """A readable table of `assessment_dict(...)`: every metric, then the criteria."""
-    g = 9.80665
+    g = G
     lines = [
         (
             f"Record: {data['record']} ({data['samples']} samples at "
@@ -107,7 +105,7 @@ def assess_command(args) -> int:
     except RecordError as error:
         raise CommandError(str(error)) from None
     cfc = None if args.cfc == 0 else args.cfc
-    if cfc is not None and record.dt * cfc * 2.0775 >= 0.5:
+    if cfc is not None and record.dt * cfc * filters.J211_DESIGN_FACTOR >= 0.5:
         raise CommandError(
             f"--cfc {cfc}: the record's {1 / record.dt:g} Hz sampling is too slow for it"
         )
@@ -134,11 +132,5 @@ def assess_command(args) -> int:
     plots = (
         [] if args.no_plots else write_assessment_plots(record, risk, args.out, args.asi_edition)
     )
-    data["plots"] = [str(p) for p in plots]
-    if args.json:
-        print(json.dumps(data, indent=2))
-    else:
-        print(format_assessment(data))
-        if plots:
-            progress("Plots: " + ", ".join(str(p) for p in plots))
+    print_result(args, data, plots, format_assessment)
     return EXIT_OK if data["passed"] else EXIT_FAILED
