@@ -15,8 +15,20 @@ def _is_traced(value) -> bool:
     return isinstance(value, Tracer)
 
 
-def _fail(name: str, rule: str, value) -> ValueError:
-    return ValueError(f"{name} must be {rule}; got {np.asarray(value).tolist()!r}")
+_LISTED = 8  # a message lists the values of an array up to this size, else the first bad one
+
+
+def _fail(name: str, rule: str, value, ok) -> ValueError:
+    array = np.asarray(value)
+    if array.size <= _LISTED:
+        return ValueError(f"{name} must be {rule}; got {array.tolist()!r}")
+    bad = ~np.broadcast_to(np.asarray(ok, dtype=bool), array.shape)
+    first = np.unravel_index(np.argmax(bad), array.shape)
+    where = first[0] if len(first) == 1 else first
+    return ValueError(
+        f"{name} must be {rule}; {int(bad.sum())} of its {array.size} values are not "
+        f"(the first at index {where}: {array[first].item()!r})"
+    )
 
 
 def check(name: str, value, predicate, rule: str):
@@ -28,7 +40,7 @@ def check(name: str, value, predicate, rule: str):
     with np.errstate(invalid="ignore"):
         ok = predicate(array)
     if not np.all(ok):
-        raise _fail(name, rule, value)
+        raise _fail(name, rule, value, ok)
     return jnp.asarray(value, dtype=jnp.result_type(float))
 
 

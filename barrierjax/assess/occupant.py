@@ -20,6 +20,7 @@ import numpy as np
 from jax.core import Tracer
 from jaxtyping import Array, Bool, Float
 
+from .. import _checks
 from .asi import EDITIONS, asi_history
 from .flail import FLAIL_X, FLAIL_Y, flail_space, ridedown
 from .head import head_impact, post_impact_head_deceleration
@@ -114,14 +115,6 @@ def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
     )
 
 
-def _finite(name, x):
-    if isinstance(x, Tracer):
-        return eqx.error_if(x, ~jnp.all(jnp.isfinite(x)), f"{name} must be finite (no NaN or inf)")
-    if not np.all(np.isfinite(np.asarray(x, dtype=float))):
-        raise ValueError(f"{name} must be finite (no NaN or inf)")
-    return x
-
-
 def occupant_risk(
     t,
     ax,
@@ -162,7 +155,10 @@ def occupant_risk(
             raise ValueError(
                 f"{name} must have the samples of t on its last axis ({len(t)}); got shape {np.shape(x)}"
             )
-    channels = {name: _finite(name, jnp.asarray(x, dtype=float)) for name, x in channels.items()}
+    channels = {
+        name: _checks.check(name, x, jnp.isfinite, "finite (no NaN or inf)")
+        for name, x in channels.items()
+    }
     shape = jnp.broadcast_shapes(*(x.shape for x in channels.values()))
     flat = {name: jnp.broadcast_to(x, shape).reshape(-1, shape[-1]) for name, x in channels.items()}
     flail = jnp.asarray(flail_x, float), jnp.asarray(flail_y, float)
