@@ -9,7 +9,14 @@ import scipy.linalg
 from barrierjax.beam.examples import example_model, final_state, report_example
 from barrierjax.beam.integrate import integrate, stable_step, step_sizes
 from barrierjax.beam.layered import layered_section, rectangular_section, section_update
-from barrierjax.beam.model import beam_model, cantilever, linear_matrices
+from barrierjax.beam.model import (
+    beam_model,
+    cantilever,
+    init_sections,
+    internal_forces,
+    linear_matrices,
+    tangent_stiffness,
+)
 from barrierjax.materials.overstress import CowperSymonds
 from barrierjax.materials.plasticity import RateIndependentPlasticity
 
@@ -163,6 +170,35 @@ def test_linear_acceleration_stability_limit(factor, stable):
 
 
 # --- examples ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("shallow", [True, False])
+def test_tangent_stiffness_is_the_derivative_of_the_internal_forces(shallow):
+    """The assembled [K1] + [K2], built from the sections' tangents and the strains' second
+    derivatives, against forward-mode differentiation of the internal forces, at a
+    displacement that rotates the chords and yields the outer fibres (Cowper-Symonds, a
+    step of 1e-4 s from the unstressed state)."""
+    model = example_model(1, n_elements=3)
+    model = beam_model(
+        model.coords,
+        model.connectivity,
+        model.section,
+        model.rho,
+        fixed=(0, 1, 2),
+        shallow=shallow,
+    )
+    u_old = jnp.zeros(model.n_dofs)
+    u = u_old.at[3::3].set(jnp.asarray([-0.01, -0.05, -0.12]))
+    u = u.at[4::3].set(jnp.asarray([0.3, 1.1, 2.3])).at[5::3].set(jnp.asarray([0.1, 0.18, 0.21]))
+    stress, state = init_sections(model)
+    dt = jnp.asarray(1e-4)
+    K, f, out = jax.jit(lambda u: tangent_stiffness(model, u, u_old, stress, state, dt))(u)
+    forces = lambda u: internal_forces(model, u, u_old, stress, state, dt)[0]
+    reference = jax.jit(jax.jacfwd(forces))(u)
+    assert np.any(np.asarray(out[1].plastic_strain) != 0)  # some fibres flow
+    np.testing.assert_allclose(np.asarray(f), np.asarray(jax.jit(forces)(u)), rtol=1e-12, atol=1e-9)
+    scale = np.max(np.abs(np.asarray(reference)))
+    np.testing.assert_allclose(np.asarray(K), np.asarray(reference), rtol=1e-9, atol=1e-12 * scale)
 
 
 def test_rate_independent_example_1_is_sensible():

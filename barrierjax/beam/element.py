@@ -98,11 +98,13 @@ def element_response(
     scheme="implicit",
     iterations=0,
     shallow=True,
+    tangent=False,
 ):
     """Internal nodal forces (6,) of one element at q_new, stepping its sections from the
     converged q_old (stresses and states of shape (n_points, n_fibres)) over dt.
 
-    Returns (f, (stress, state, N, M, strains))."""
+    Returns (f, (stress, state, N, M, strains)), and with `tangent` the element's tangent
+    stiffness (6, 6) after them (`_stiffness`)."""
     xi = jnp.asarray(xi, dtype=q_new.dtype)
     weights = jnp.asarray(weights, dtype=q_new.dtype)
 
@@ -116,13 +118,29 @@ def element_response(
         out = section_update(
             section, stress_p, state_p, de[0], de[1], dt, scheme=scheme, iterations=iterations
         )
-        return out.N, out.M, out.stress, out.state
+        return out.N, out.M, out.stress, out.state, out.tangent
 
-    N, M, new_stress, new_state = jax.vmap(point)(stress, state, d_e)
-    L0 = jnp.sqrt(jnp.sum((X2 - X1) ** 2))
-    resultant = (weights * L0)[:, None] * jnp.stack([N, M], axis=-1)
+    N, M, new_stress, new_state, D = jax.vmap(point)(stress, state, d_e)
+    length_weights = weights * jnp.sqrt(jnp.sum((X2 - X1) ** 2))
+    resultant = length_weights[:, None] * jnp.stack([N, M], axis=-1)
     (f,) = pullback(resultant)
-    return f, (new_stress, new_state, N, M, e_new)
+    out = (new_stress, new_state, N, M, e_new)
+    if not tangent:
+        return f, out
+    return f, out, _stiffness(strains, q_new, resultant, length_weights[:, None, None] * D)
+
+
+def _stiffness(strains, q, resultant, D):
+    """The tangent stiffness [K1] + [K2] (4.2.36)-(4.2.37) of f = B^T r, B = de/dq the
+    strains' derivative at the points and r the resultants (weighted by the points' lengths):
+    B^T D B with D the sections' consistent tangents d r / d e (`section_update`), plus the
+    geometric stiffness sum r . d^2 e / dq^2 (the co-rotational frame's and the shallow
+    term's). The sections' laws are differentiated once, along d e, not along each of the
+    six dofs."""
+    B = jax.jacfwd(strains)(q)  # (n_points, 2, 6)
+    material = jnp.einsum("pai,pab,pbj->ij", B, D, B)
+    geometric = jax.hessian(lambda x: jnp.sum(resultant * strains(x)))(q)
+    return material + geometric
 
 
 def _hermite(xi, L):

@@ -239,31 +239,16 @@ def internal_forces(model, u_new, u_old, stress, state, dt, *, scheme="implicit"
 
 
 def tangent_stiffness(model, u_new, u_old, stress, state, dt, *, scheme="implicit", iterations=0):
-    """Assembled tangent stiffness [K1] + [K2] (4.2.36)-(4.2.37) at u_new: the forward-mode
-    derivative of the element forces (consistent material tangent, co-rotational geometric
-    stiffness). Returns (K, f, out)."""
+    """Assembled tangent stiffness [K1] + [K2] (4.2.36)-(4.2.37) at u_new: the consistent
+    material tangent and the co-rotational geometric stiffness (`element._stiffness`).
+    Returns (K, f, out)."""
     idx, X1, X2, response = _elements(model, dt, scheme, iterations)
-
-    def one(X1, X2, qn, qo, s, st):
-        (f, out), k = _value_and_jacfwd(lambda q: response(X1, X2, q, qo, s, st), qn)
-        return f, k, out
-
-    f_el, k_el, out = jax.vmap(one)(X1, X2, u_new[idx], u_old[idx], stress, state)
+    response = functools.partial(response, tangent=True)
+    f_el, out, k_el = jax.vmap(response)(X1, X2, u_new[idx], u_old[idx], stress, state)
     n = model.n_dofs
     f = jnp.zeros(n, u_new.dtype).at[idx].add(f_el)
     K = jnp.zeros((n, n), u_new.dtype).at[idx[:, :, None], idx[:, None, :]].add(k_el)
     return K, f, out
-
-
-def _value_and_jacfwd(fun, x):
-    """fun(x) = (y, aux); returns ((y, aux), dy/dx) by one vmapped jvp."""
-    basis = jnp.eye(x.shape[0], dtype=x.dtype)
-    primal = fun(x)
-
-    def column(v):
-        return jax.jvp(lambda y: fun(y)[0], (x,), (v,))[1]
-
-    return primal, jax.vmap(column, out_axes=1)(basis)
 
 
 def mass_matrix(model, u):
