@@ -14,14 +14,33 @@ this module only picks the folder and the thresholds.
 
 A library import does not turn it on: a user's program decides (`enable()` does it in one
 line).
+
+The persistent cache still traces and lowers a model before it finds the executable (its
+key is the lowered program): half a second for the oblique model, on every run of the
+command line. Within `keeping_programs()`, as the command line runs, the models' entry
+points (`stored_program`) also keep their compiled executables in `programs/` beside the
+cache, keyed by the arguments' shapes and types, the static options, the
+versions of jax, jaxlib, equinox and diffrax, the jax settings that change a trace, and a
+digest of barrierjax's own source: a later process that calls the same entry point with
+concrete arrays of the same shapes loads the executable and runs it, with no tracing or
+lowering at all. Calls under a caller's `jit`, `vmap` or `grad` (traced
+arguments) go through `jax.jit` as always.
 """
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import hashlib
+import math
 import os
+import pickle
+import tempfile
+import warnings
+from importlib import metadata
 from pathlib import Path
 
-__all__ = ["cache_dir", "enable"]
+__all__ = ["cache_dir", "enable", "keeping_programs", "stored_program"]
 
 _OFF = {"off", "0", "false", "no", ""}
 
@@ -51,3 +70,136 @@ def enable() -> Path | None:
     jax.config.update("jax_compilation_cache_dir", str(folder))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     return folder
+
+
+@contextlib.contextmanager
+def keeping_programs():
+    """Within it, `stored_program` entry points keep their compiled executables in
+    `programs/` of the cache folder (`enable()`'s, which it calls), and load them from
+    there; nothing is kept where the cache is off."""
+    global _programs
+    folder = enable()
+    before = _programs
+    _programs = None if folder is None else folder / "programs"
+    try:
+        yield _programs
+    finally:
+        _programs = before
+
+
+# Where `stored_program` keeps executables (None: it is off), and those of this process.
+_programs: Path | None = None
+_loaded: dict = {}
+
+
+def stored_program(jitted):
+    """`jitted` (a `jax.jit` function whose static arguments are keywords), whose compiled
+    executable is kept on disk and loaded by later processes, within `keeping_programs()`
+    and where the positional arguments are concrete arrays (or None)."""
+
+    @functools.wraps(jitted)
+    def call(*args, **static):
+        import jax
+
+        concrete = all(
+            a is None or (isinstance(a, jax.Array) and not isinstance(a, jax.core.Tracer))
+            for a in args
+        )
+        if _programs is None or not concrete:
+            return jitted(*args, **static)
+        key = _key(jitted, args, static)
+        if key is None:
+            return jitted(*args, **static)
+        stored = _loaded.get(key) or _load(key) or _compile_and_store(jitted, key, args, static)
+        _loaded[key] = stored
+        executable, outputs = stored
+        return jax.tree.unflatten(outputs, executable(*args))
+
+    return call
+
+
+def _key(jitted, args, static) -> str | None:
+    """What the program depends on, hashed; None where a static option has no stable text
+    (an object printed with its address)."""
+    import jax
+
+    options = repr(sorted(static.items()))
+    if " at 0x" in options:
+        return None
+    avals = [None if a is None else (a.shape, str(a.dtype), a.weak_type) for a in args]
+    settings = [jax.config.jax_enable_x64, jax.config.jax_numpy_dtype_promotion,
+                jax.config.jax_default_matmul_precision, os.environ.get("XLA_FLAGS", ""),
+                str(jax.devices()[0])]  # fmt: skip
+    versions = [metadata.version(name) for name in ("jax", "jaxlib", "equinox", "diffrax")]
+    name = f"{jitted.__module__}.{jitted.__qualname__}"
+    text = repr((name, options, avals, settings, versions, _source_digest()))
+    return f"{jitted.__name__.strip('_')}-{hashlib.sha256(text.encode()).hexdigest()[:32]}"
+
+
+@functools.cache
+def _source_digest() -> str:
+    """A digest of every Python file of the package: any change to the code is a new key."""
+    root = Path(__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def _load(key):
+    """(the executable stored under `key`, its output tree), or None where there is none or
+    it does not load (from another machine, or damaged: it is compiled again)."""
+    import jax
+    from jax.experimental import serialize_executable
+
+    try:
+        payload, inputs, outputs = pickle.loads((_programs / key).read_bytes())
+        # The trees are rebuilt here from skeletons (their leaves numbered): a pickled
+        # tree of equinox modules does not unflatten in another process. The executable
+        # returns the output's leaves.
+        outputs = jax.tree.structure(outputs)
+        leaves = jax.tree.structure(list(range(outputs.num_leaves)))
+        executable = serialize_executable.deserialize_and_load(
+            payload, jax.tree.structure(inputs), leaves
+        )
+        return executable, outputs
+    except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError, RuntimeError):
+        return None
+
+
+def _compile_and_store(jitted, key, args, static):
+    """Compile `jitted` at `args` (its output leaves, under a name of its own) and store the
+    executable; returns (the executable, its output tree)."""
+    import jax
+    from jax.experimental import serialize_executable
+
+    trees = []
+
+    def stored(*args):
+        leaves, tree = jax.tree.flatten(jitted(*args, **static))
+        trees.append(tree)
+        return leaves
+
+    stored.__name__ = f"stored_{jitted.__name__.strip('_')}"
+    lowered = jax.jit(stored).lower(*args)
+    # An executable that JAX's cache loaded serializes without its code: this program is
+    # compiled anew and never written there (its name keeps it apart from `jitted`'s).
+    shortest = jax.config.jax_persistent_cache_min_compile_time_secs
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", math.inf)
+    try:
+        executable = lowered.compile()
+    finally:
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", shortest)
+    (outputs,) = trees
+    try:
+        payload, in_tree, _ = serialize_executable.serialize(executable)
+        numbered = lambda tree: jax.tree.unflatten(tree, list(range(tree.num_leaves)))
+        _programs.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=_programs, delete=False) as file:
+            pickle.dump((payload, numbered(in_tree), numbered(outputs)), file)
+        os.replace(file.name, _programs / key)  # whole, or not at all
+    except (OSError, pickle.PicklingError, ValueError, TypeError, RuntimeError) as error:
+        # Not storable (host callbacks, a full disk): only slower.
+        warnings.warn(f"not kept in {_programs} ({error})", stacklevel=3)
+    return executable, outputs

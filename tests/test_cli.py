@@ -3,6 +3,7 @@
 import json
 import math
 import shutil
+import os
 import subprocess
 import sys
 import textwrap
@@ -307,6 +308,29 @@ def test_console_script_json(tmp_path):
     data = json.loads(completed.stdout)
     check_against_simulate(data, default_scene())
     assert "Traceback" not in completed.stderr
+
+
+@pytest.mark.skipif(shutil.which("barrierjax") is None, reason="console script not installed")
+def test_console_script_second_run_neither_traces_nor_compiles_the_models(tmp_path):
+    """Two processes on one cache folder: the first keeps the models' programs, the second
+    loads them (JAX's compile log names no model); both exit 0 with the same summary, and a
+    bad scene exits 2 with one line on stderr."""
+    env = {**os.environ, "BARRIERJAX_CACHE_DIR": str(tmp_path / "cache"), "JAX_LOG_COMPILES": "1"}
+    run = lambda *args: subprocess.run(
+        ["barrierjax", "run", *args], capture_output=True, text=True, env=env, cwd=tmp_path
+    )
+    first, second = run("--no-plots"), run("--no-plots")
+    assert first.returncode == second.returncode == 0, first.stderr + second.stderr
+    assert second.stdout == first.stdout and "Occupant risk" in second.stdout
+    assert "_normal_impact" in first.stderr and "_records" in first.stderr
+    assert "_normal_impact" not in second.stderr and "_records" not in second.stderr
+    assert {p.name.split("-")[0] for p in (tmp_path / "cache" / "programs").iterdir()} == {
+        "normal_impact",
+        "records",
+    }
+    bad = run(str(tmp_path / "missing.toml"))
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1 and bad.stderr.startswith("error:")
 
 
 OBLIQUE_SCENE = Path(__file__).resolve().parent.parent / "examples" / "oblique_scene.toml"

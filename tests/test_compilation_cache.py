@@ -4,6 +4,7 @@ import sys
 from pathlib import Path
 
 import jax
+import jax.numpy as jnp
 import pytest
 
 from barrierjax import compilation_cache
@@ -50,3 +51,77 @@ def test_a_second_process_loads_what_the_first_compiled(tmp_path):
     assert second.returncode == 0, second.stderr
     assert second.stdout == first.stdout
     assert sorted(p.name for p in Path(tmp_path / "cache").iterdir()) == entries
+
+
+# A jitted function that counts its traces, kept by `stored_program`, run in a fresh
+# process: the second process must load its program without tracing it.
+_TRACED_PROGRAM = """
+import functools, jax, jax.numpy as jnp
+jax.config.update("jax_enable_x64", True)
+from barrierjax import compilation_cache
+traces = []
+
+@compilation_cache.stored_program
+@functools.partial(jax.jit, static_argnames=("power",))
+def f(x, y, *, power):
+    traces.append(1)
+    return {"value": jnp.sum(x**power) + y, "parts": (x * y, None)}
+
+with compilation_cache.keeping_programs():
+    out = f(jnp.arange(4.0), jnp.asarray(2.0), power=3)
+    again = f(jnp.arange(4.0), jnp.asarray(2.0), power=3)
+print(len(traces), float(out["value"]), out["parts"][0].tolist(), out["parts"][1],
+      float(again["value"]))
+"""
+
+
+def _run(program, cache):
+    env = {**os.environ, "BARRIERJAX_CACHE_DIR": str(cache)}
+    done = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.split()
+
+
+def test_a_stored_program_is_loaded_by_the_next_process_without_tracing(tmp_path):
+    first = _run(_TRACED_PROGRAM, tmp_path / "cache")
+    assert first == ["1", "38.0", "[0.0,", "2.0,", "4.0,", "6.0]", "None", "38.0"]
+    stored = list((tmp_path / "cache" / "programs").iterdir())
+    assert len(stored) == 1 and stored[0].name.startswith("f-")
+    second = _run(_TRACED_PROGRAM, tmp_path / "cache")
+    assert second == ["0"] + first[1:]
+    # Another static option or shape is another program.
+    other = _run(_TRACED_PROGRAM.replace("power=3", "power=2"), tmp_path / "cache")
+    assert other[:2] == ["1", "16.0"]
+    assert len(list((tmp_path / "cache" / "programs").iterdir())) == 2
+
+
+def test_a_damaged_stored_program_is_compiled_again(tmp_path):
+    _run(_TRACED_PROGRAM, tmp_path / "cache")
+    (stored,) = (tmp_path / "cache" / "programs").iterdir()
+    stored.write_bytes(b"not a program")
+    again = _run(_TRACED_PROGRAM, tmp_path / "cache")
+    assert again[:2] == ["1", "38.0"]
+    assert _run(_TRACED_PROGRAM, tmp_path / "cache")[0] == "0"  # mended
+
+
+def test_models_under_a_stored_program_give_what_jit_gives(monkeypatch, tmp_path):
+    # The normal model through its stored program (twice: stored, then loaded in this
+    # process), under jax.grad (traced: plain jit), and without the store.
+    from barrierjax.hinge import normal_impact
+
+    monkeypatch.setenv("BARRIERJAX_CACHE_DIR", str(tmp_path / "cache"))
+    args = (jnp.asarray(2.0), jnp.asarray(3.0), jnp.asarray(0.5))
+    damage = lambda *a: normal_impact(*a, n_history=8).damage
+    plain, plain_grad = damage(*args), jax.grad(damage)(*args)
+    with compilation_cache.keeping_programs() as folder:
+        kept = [damage(*args) for _ in range(2)]
+        kept_grad = jax.grad(damage)(*args)
+    assert [p.name.split("-")[0] for p in folder.iterdir()] == ["normal_impact"]
+    assert all(float(k) == float(plain) for k in kept)
+    assert float(kept_grad) == float(plain_grad)
+
+
+def test_nothing_is_kept_where_the_cache_is_off(monkeypatch):
+    monkeypatch.setenv("BARRIERJAX_CACHE_DIR", "off")
+    with compilation_cache.keeping_programs() as folder:
+        assert folder is None

@@ -21,6 +21,7 @@ from jax.core import Tracer
 from jaxtyping import Array, Bool, Float
 
 from .. import _checks
+from ..compilation_cache import stored_program
 from .asi import EDITIONS, asi_history
 from .flail import FLAIL_X, FLAIL_Y, flail_space, ridedown
 from .head import head_impact, post_impact_head_deceleration
@@ -86,6 +87,7 @@ def sampling_step(t) -> float:
     return float(dt)
 
 
+@stored_program
 @functools.partial(jax.jit, static_argnames=("dt", "t0", "edition"))
 def _records(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
     """`_one_record` over the leading axis: one executable per record length and step."""

@@ -1,7 +1,5 @@
 """`python -m barrierjax.cli`: the `barrierjax` command."""
 
-import sys
+from . import command
 
-from . import main
-
-sys.exit(main())
+command()

@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 
 from ... import _checks
+from ...compilation_cache import stored_program
 from ..._solve.batching import sorted_chunks
 from ..._solve.sensitivity import forward_jacobian_jvp
 from .closed_form import solve_closed_form
@@ -15,6 +16,7 @@ from .ode import solve_ode
 from .results import NormalImpact, finish_history, normal_result, rigid_barrier
 
 
+@stored_program
 @functools.partial(jax.jit, static_argnames=("method", "rtol", "n_history", "solver"))
 def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
     yields = phi > 1.0

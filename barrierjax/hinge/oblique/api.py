@@ -10,6 +10,7 @@ import numpy as np
 from jax.core import Tracer
 
 from ... import _checks
+from ...compilation_cache import stored_program
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
 from ..._solve.sensitivity import forward_jacobian_jvp
@@ -171,6 +172,7 @@ def _of_lane(carry: Carry, lane) -> Carry:
 _LANES, _REFILL = 384, 48
 
 
+@stored_program
 @functools.partial(jax.jit, static_argnames=("max_steps", "n_history", "n_x"))
 def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
     def solve(*inputs_and_rtol, batched=mu.ndim > 0):
