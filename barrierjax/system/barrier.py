@@ -89,9 +89,9 @@ def guardrail(
 ) -> Guardrail:
     """A rail of `length` (m) on posts every `post_spacing` (m; `length` must hold a whole
     number of spans, to 1e-6), `elements_per_span` elements between posts."""
-    spans = float(length) / float(post_spacing)
     if not (post_spacing > 0) or not np.isfinite(float(post_spacing)):
         raise ValueError(f"post_spacing must be positive and finite; got {post_spacing!r}")
+    spans = float(length) / float(post_spacing)
     if not (length > 0) or abs(spans - round(spans)) > 1e-6 or round(spans) < 1:
         raise ValueError(
             f"length must be a positive whole number of post spacings; got {length!r} "
@@ -101,7 +101,7 @@ def guardrail(
         raise ValueError(f"elements_per_span must be a positive integer; got {elements_per_span!r}")
     n_elements = round(spans) * int(elements_per_span)
     spacing = positive("post_spacing", post_spacing)
-    x = jnp.arange(n_elements + 1) * (spacing / elements_per_span)
+    x = jnp.arange(n_elements + 1, dtype=spacing.dtype) * (spacing / elements_per_span)
     coords = jnp.stack([x, jnp.zeros_like(x)], -1)
     density = positive("density", density)
     dx = spacing / elements_per_span

@@ -82,12 +82,21 @@ def system_impact(
     the guardrail's stable step, `barrier.stable_step`, or 1e-4 s for a wall)."""
     speed = positive("speed", speed)
     angle = jnp.radians(in_range("angle_deg", angle_deg, 0.0, 90.0))
-    duration = positive("duration", duration)
+    if not (isinstance(duration, int | float) and 0 < duration < np.inf):
+        raise ValueError(f"duration must be a positive number of seconds; got {duration!r}")
+    concrete_rail = isinstance(barrier, Guardrail) and not any(
+        isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
+    )
     if dt is None:
         dt = 1e-4 if isinstance(barrier, RigidWall) else stable_step(barrier, _bound(vehicle))
+    elif concrete_rail and float(dt) > (largest := stable_step(barrier, _bound(vehicle), 1.0)):
+        raise ValueError(
+            f"dt must be at most the central differences' stable step, {largest:.3g} s for "
+            f"this rail; got {dt!r}"
+        )
     dt = float(dt)
-    if isinstance(barrier, Guardrail):
-        length = float(barrier.rail.coords[-1, 0])
+    if concrete_rail:
+        length = float(np.asarray(barrier.rail.coords)[-1, 0])
         if not isinstance(impact_point, jax.core.Tracer) and not 0 < float(impact_point) < length:
             raise ValueError(
                 f"impact_point must lie on the rail, in (0, {length:g}) m; got {impact_point!r}"
@@ -104,119 +113,140 @@ def _bound(v: Vehicle):
     return float(v.crush_stiffness) * float(v.length)
 
 
+class _Loads(eqx.Module):
+    """What acts at a step: on the rail's dofs, and the vehicle's resultants."""
+
+    internal: jnp.ndarray
+    posts: jnp.ndarray
+    anchors: jnp.ndarray
+    contact: jnp.ndarray  # the contact's forces on the rail's dofs
+    contact_force: jnp.ndarray  # ... and their resultant on the vehicle (2,)
+    contact_moment: jnp.ndarray
+    tyre_force: jnp.ndarray
+    tyre_moment: jnp.ndarray
+
+
+class _State(eqx.Module):
+    """Positions at the step and the one before, velocities at the half step before."""
+
+    X: jnp.ndarray
+    psi: jnp.ndarray
+    V: jnp.ndarray
+    w: jnp.ndarray
+    X_old: jnp.ndarray
+    psi_old: jnp.ndarray
+    u: jnp.ndarray
+    u_old: jnp.ndarray
+    v: jnp.ndarray
+    sections: tuple
+    crush: jnp.ndarray
+    plastic: jnp.ndarray
+    failed: jnp.ndarray
+    works: jnp.ndarray  # rail, posts, anchors, contact, tyres, contact friction (J)
+    last: _Loads
+
+
 @functools.partial(jax.jit, static_argnames=("dt", "n_saved", "save_every"))
 def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_saved, save_every):
     body_points, share = periphery(vehicle)
     stiffness = vehicle.crush_stiffness * share
     strength = vehicle.crush_strength * share
     rail = barrier if isinstance(barrier, Guardrail) else None
-    cg, psi = _initial_pose(vehicle, impact_point, angle)
-    velocity = speed * jnp.stack([jnp.cos(angle), jnp.sin(angle)])
     kinetic0 = 0.5 * vehicle.mass * speed**2
-
     if rail is not None:
         mass = lumped_mass(rail)
-        stress, state = init_sections(rail.rail)
-        n_dofs, n_posts = mass.shape[0], len(rail.post_nodes)
+        sections = init_sections(rail.rail)
+        n_posts = len(rail.post_nodes)
         rail_nodes = rail.rail.coords
-    else:
-        mass = jnp.ones(6)
-        stress = state = None
-        n_dofs, n_posts = 6, 0
+    else:  # a wall: a rail of two immovable nodes
+        mass, sections, n_posts = jnp.full(6, jnp.inf), (), 0
         rail_nodes = jnp.stack([jnp.stack([barrier.start, 0.0]), jnp.stack([barrier.end, 0.0])])
-    zero_dofs = jnp.zeros(n_dofs)
-    zero = jnp.zeros(())
+    zero_dofs = jnp.zeros(mass.shape[0])
 
-    def forces(carry):
-        """Everything that acts at the current step, and the rail's stepped sections."""
-        (X, psi, V, w, u, u_old, v_rail, stress, state, crush, plastic, failed) = carry[:12]
-        R = rotation(psi)
-        r = body_points @ R.T
-        points = X + r
-        point_velocity = V + w * jnp.stack([-r[:, 1], r[:, 0]], -1)
+    def loads(s: _State):
+        """Everything that acts at the step, and the stepped state of rail, posts and crush."""
+        r = body_points @ rotation(s.psi).T
+        point_velocity = s.V + s.w * jnp.stack([-r[:, 1], r[:, 0]], -1)
         if rail is not None:
-            f_int, (stress, state, *_) = internal_forces(rail.rail, u, u_old, stress, state, dt)
-            f_post, plastic, failed = post_forces(rail, u, plastic, failed)
-            f_anchor = anchor_forces(rail, u)
-            nodes = rail_nodes + u.reshape(-1, 3)[:, :2]
-            node_velocity = v_rail.reshape(-1, 3)[:, :2]
+            f_int, (stress, state, *_) = internal_forces(rail.rail, s.u, s.u_old, *s.sections, dt)
+            sections = (stress, state)
+            f_post, plastic, failed = post_forces(rail, s.u, s.plastic, s.failed)
+            f_anchor = anchor_forces(rail, s.u)
         else:
             f_int = f_post = f_anchor = zero_dofs
-            nodes, node_velocity = rail_nodes, jnp.zeros_like(rail_nodes)
+            sections, plastic, failed = s.sections, s.plastic, s.failed
+        nodes = rail_nodes + s.u.reshape(-1, 3)[:, :2]
         on_points, on_nodes, crush, friction_power, _ = face_contact(
-            points, point_velocity, crush, stiffness, strength, nodes, node_velocity, friction
-        )
-        f_contact = jnp.concatenate([on_nodes, jnp.zeros((on_nodes.shape[0], 1))], -1).ravel()
-        if rail is None:
-            f_contact = zero_dofs
-        tyre_force, tyre_moment, _ = tyre_forces(vehicle, psi, V, w)
-        force = jnp.sum(on_points, 0) + tyre_force
-        moment = jnp.sum(r[:, 0] * on_points[:, 1] - r[:, 1] * on_points[:, 0]) + tyre_moment
-        parts = (f_int, f_post, f_anchor, f_contact, on_points, friction_power, tyre_force,
-                 tyre_moment)  # fmt: skip
-        return force, moment, parts, (stress, state, crush, plastic, failed)
+            s.X + r, point_velocity, s.crush, stiffness, strength, nodes,
+            s.v.reshape(-1, 3)[:, :2], friction,
+        )  # fmt: skip
+        on_rail = jnp.concatenate([on_nodes, jnp.zeros((on_nodes.shape[0], 1))], -1).ravel()
+        tyre_force, tyre_moment, _ = tyre_forces(vehicle, s.psi, s.V, s.w)
+        contact_moment = jnp.sum(r[:, 0] * on_points[:, 1] - r[:, 1] * on_points[:, 0])
+        acting = _Loads(f_int, f_post, f_anchor, on_rail, jnp.sum(on_points, 0),
+                        contact_moment, tyre_force, tyre_moment)  # fmt: skip
+        return acting, sections, crush, plastic, failed, friction_power, on_points
 
-    def step(carry, _):
-        X, psi, V, w, u, u_old, v_rail = carry[:4] + carry[4:7]
-        works, last = carry[12], carry[13]
-        force, moment, parts, (stress, state, crush, plastic, failed) = forces(carry)
-        f_int, f_post, f_anchor, f_contact, on_points, friction_power, tyre_f, tyre_m = parts
-        a_rail = (f_contact - f_int - f_post - f_anchor) / mass
-        a_vehicle, alpha = force / vehicle.mass, moment / vehicle.yaw_inertia
-        V_next, w_next = V + dt * a_vehicle, w + dt * alpha
-        v_rail_next = v_rail + dt * a_rail
-        # Velocities at this step: the mean of the half steps around it.
-        V_mid, w_mid, v_mid = 0.5 * (V + V_next), 0.5 * (w + w_next), 0.5 * (v_rail + v_rail_next)
-        R = rotation(psi)
-        r = body_points @ R.T
-        points_mid = V_mid + w_mid * jnp.stack([-r[:, 1], r[:, 0]], -1)
-        contact_power = jnp.sum(on_points * points_mid) + jnp.dot(f_contact, v_mid)
-        tyre_power = jnp.dot(tyre_f, V_mid) + tyre_m * w_mid
-        du = u - u_old
-        f_last = last
-        trapezoid = lambda new, old: 0.5 * jnp.dot(new + old, du)
-        works = works + jnp.stack([
-            trapezoid(f_int, f_last[0]), trapezoid(f_post, f_last[1]),
-            trapezoid(f_anchor, f_last[2]), -dt * contact_power, -dt * tyre_power,
+    def step(s: _State, _):
+        now, sections, crush, plastic, failed, friction_power, on_points = loads(s)
+        a_rail = (now.contact - now.internal - now.posts - now.anchors) / mass
+        force = now.contact_force + now.tyre_force
+        moment = now.contact_moment + now.tyre_moment
+        V = s.V + dt * force / vehicle.mass
+        w = s.w + dt * moment / vehicle.yaw_inertia
+        v = s.v + dt * a_rail
+        # The works of the step before to this one: trapezoids over the displacements.
+        du, dX, dpsi = s.u - s.u_old, s.X - s.X_old, s.psi - s.psi_old
+        on_rail = lambda f, f0: 0.5 * jnp.dot(f + f0, du)
+        on_vehicle = lambda F, F0, M, M0: 0.5 * (jnp.dot(F + F0, dX) + (M + M0) * dpsi)
+        last = s.last
+        works = s.works + jnp.stack([
+            on_rail(now.internal, last.internal),
+            on_rail(now.posts, last.posts),
+            on_rail(now.anchors, last.anchors),
+            -on_rail(now.contact, last.contact) - on_vehicle(
+                now.contact_force, last.contact_force, now.contact_moment, last.contact_moment),
+            -on_vehicle(now.tyre_force, last.tyre_force, now.tyre_moment, last.tyre_moment),
             -dt * friction_power,
         ])  # fmt: skip
+        # The kinetic energies at the step, from the mean of the half steps' velocities.
+        V_mid, w_mid, v_mid = 0.5 * (s.V + V), 0.5 * (s.w + w), 0.5 * (s.v + v)
         kinetic = 0.5 * vehicle.mass * jnp.sum(V_mid**2) + 0.5 * vehicle.yaw_inertia * w_mid**2
         if rail is not None:
             kinetic = kinetic + 0.5 * jnp.sum(mass * v_mid**2)
-        error = (kinetic0 - kinetic - jnp.sum(works[:5])) / kinetic0  # (friction: in contact)
-        out = (X, psi, V_mid, w_mid, R.T @ a_vehicle, u[1::3], _lateral(f_post, rail),
-               -jnp.sum(on_points @ jnp.asarray([0.0, 1.0])), error, kinetic)  # fmt: skip
-        carry = (
-            X + dt * V_next, psi + dt * w_next, V_next, w_next,
-            u + dt * v_rail_next, u, v_rail_next, stress, state, crush, plastic, failed,
-            works, (f_int, f_post, f_anchor),
-        )  # fmt: skip
-        return carry, out
+        error = (kinetic0 - kinetic - jnp.sum(works[:5])) / kinetic0
+        acceleration = rotation(s.psi).T @ (force / vehicle.mass)
+        out = (s.X, s.psi, V_mid, w_mid, acceleration, s.u[1::3], _lateral(now.posts, rail),
+               -jnp.sum(on_points[:, 1]), error, kinetic)  # fmt: skip
+        u_next = s.u + dt * v if rail is not None else s.u
+        s = _State(s.X + dt * V, s.psi + dt * w, V, w, s.X, s.psi, u_next, s.u, v, sections,
+                   crush, plastic, failed, works, now)  # fmt: skip
+        return s, out
 
-    def saved(carry, _):
-        carry, outs = jax.lax.scan(step, carry, None, length=save_every)
-        return carry, jax.tree.map(lambda x: x[0], outs)
+    def saved(s, _):
+        s, outs = jax.lax.scan(step, s, None, length=save_every)
+        return s, jax.tree.map(lambda x: x[0], outs)
 
-    crush0 = jnp.zeros(body_points.shape[0])
-    plastic0 = jnp.zeros((n_posts, 2))
-    failed0 = jnp.zeros(n_posts, bool)
-    init = (cg, psi, velocity, zero, zero_dofs, zero_dofs, zero_dofs, stress, state, crush0,
-            plastic0, failed0, jnp.zeros(6), (zero_dofs, zero_dofs, zero_dofs))  # fmt: skip
-    final, outs = jax.lax.scan(saved, init, None, length=n_saved)
+    cg, psi = _initial_pose(vehicle, impact_point, angle)
+    velocity = speed * jnp.stack([jnp.cos(angle), jnp.sin(angle)])
+    zero, zero2 = jnp.zeros(()), jnp.zeros(2)
+    nothing = _Loads(zero_dofs, zero_dofs, zero_dofs, zero_dofs, zero2, zero, zero2, zero)
+    start = _State(cg, psi, velocity, zero, cg, psi, zero_dofs, zero_dofs, zero_dofs, sections,
+                   jnp.zeros(body_points.shape[0]), jnp.zeros((n_posts, 2)),
+                   jnp.zeros(n_posts, bool), jnp.zeros(6), nothing)  # fmt: skip
+    final, outs = jax.lax.scan(saved, start, None, length=n_saved)
     X, psi, V, w, acc, deflection, post_f, contact_f, error, kinetic = outs
-    times = jnp.arange(n_saved) * (save_every * dt)
+    times = jnp.arange(n_saved, dtype=kinetic0.dtype) * (save_every * dt)
     history = SystemHistory(times, X, psi, V, w, acc, deflection, post_f, contact_f, error)
-    works = final[12]
     names = ("rail", "posts", "anchors", "contact", "tyres", "contact_friction")
-    energies = {name: works[k] for k, name in enumerate(names)} | {"kinetic": kinetic[-1]}
-    V_end = V[-1]
-    exit_speed = jnp.sqrt(jnp.sum(V_end**2))
-    exit_angle = jnp.degrees(jnp.arctan2(V_end[1], V_end[0]))
+    energies = {name: final.works[k] for k, name in enumerate(names)} | {"kinetic": kinetic[-1]}
+    exit_speed = jnp.sqrt(jnp.sum(V[-1] ** 2))
+    exit_angle = jnp.degrees(jnp.arctan2(V[-1, 1], V[-1, 0]))
     dynamic = jnp.max(deflection) if rail is not None else zero
-    body_points_y = jax.vmap(lambda x, p: (x + body_points @ rotation(p).T)[:, 1])(X, psi)
-    working = jnp.maximum(dynamic, jnp.max(body_points_y))
+    outline_y = jax.vmap(lambda x, p: (x + body_points @ rotation(p).T)[:, 1])(X, psi)
+    working = jnp.maximum(dynamic, jnp.max(outline_y))
     return SystemResult(history, kinetic0, energies, exit_speed, exit_angle, dynamic, working,
-                        final[11])  # fmt: skip
+                        final.failed)  # fmt: skip
 
 
 def _lateral(f_post, rail):

@@ -85,19 +85,21 @@ def vehicle(
 
 
 def periphery(v: Vehicle):
-    """The contact points in body axes (n, 2), the length of periphery each stands for (n,):
-    the front edge's points from the right corner to the left one (not included), then the
-    left side's from the left front corner back to the rear."""
-    front = v.front_to_cg
-    u = (jnp.arange(v.n_front) + 0.5) / v.n_front
-    front_points = jnp.stack([jnp.full_like(u, 1.0) * front, v.width * (u - 0.5)], -1)
-    s = jnp.arange(v.n_side) / (v.n_side - 1)
-    side_points = jnp.stack([front - v.length * s, jnp.full_like(s, 0.5) * v.width], -1)
-    front_share = jnp.full(v.n_front, 1.0) * v.width / v.n_front
-    side_share = jnp.full(v.n_side, 1.0) * v.length / (v.n_side - 1)
-    side_share = side_share.at[0].multiply(0.5).at[-1].multiply(0.5)
-    points = jnp.concatenate([front_points, side_points])
-    return points, jnp.concatenate([front_share, side_share])
+    """The contact points in body axes (n, 2) and the length of periphery each stands for
+    (n,): `n_front` on the front edge from the right corner to the left one (both corners
+    included, trapezoidal shares), then `n_side` at the middles of equal parts of the left
+    side, front to rear. The front edge is symmetric: a head-on impact does not yaw."""
+    u = jnp.linspace(0.0, 1.0, v.n_front, dtype=v.width.dtype)
+    front_points = jnp.stack([jnp.full_like(u, 1.0) * v.front_to_cg, v.width * (u - 0.5)], -1)
+    front_share = jnp.full_like(u, 1.0) * v.width / (v.n_front - 1)
+    front_share = front_share.at[0].multiply(0.5).at[-1].multiply(0.5)
+    s = (jnp.arange(v.n_side, dtype=v.length.dtype) + 0.5) / v.n_side
+    side_points = jnp.stack([v.front_to_cg - v.length * s, jnp.full_like(s, 0.5) * v.width], -1)
+    side_share = jnp.full_like(s, 1.0) * v.length / v.n_side
+    return (
+        jnp.concatenate([front_points, side_points]),
+        jnp.concatenate([front_share, side_share]),
+    )
 
 
 def wheels(v: Vehicle):
