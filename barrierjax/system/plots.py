@@ -1,0 +1,133 @@
+"""Plots of a system impact: the plan view at several times (rail, posts, vehicle outline),
+the histories, and the plan view animated (a GIF, as the overhead film of a crash test).
+Rail nodes are drawn at their initial abscissa with their lateral displacement."""
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.animation import FuncAnimation, PillowWriter
+from matplotlib.figure import Figure
+
+from .barrier import Guardrail
+from .impact import SystemResult
+from .vehicle import Vehicle
+
+G = 9.80665
+
+
+def _outline(v: Vehicle, position, yaw):
+    """The vehicle's rectangle in global axes (5, 2), closed."""
+    f, b, L = float(v.front_to_cg), 0.5 * float(v.width), float(v.length)
+    body = np.array([[f, -b], [f, b], [f - L, b], [f - L, -b], [f, -b]])
+    c, s = np.cos(yaw), np.sin(yaw)
+    return body @ np.array([[c, s], [-s, c]]) + np.asarray(position)
+
+
+def _rail_x(barrier):
+    return np.asarray(barrier.rail.coords[:, 0]) if isinstance(barrier, Guardrail) else None
+
+
+def _draw_plan(ax, result, vehicle, barrier, k, *, faded=False):
+    h = result.history
+    alpha = 0.35 if faded else 1.0
+    x = _rail_x(barrier)
+    if x is not None:
+        ax.plot(x, np.asarray(h.rail_deflection[k]), color="tab:blue", alpha=alpha, lw=1.5)
+        posts = np.asarray(barrier.post_nodes)
+        ax.plot(x[posts], np.asarray(h.rail_deflection[k])[posts], "s", ms=3, color="0.3",
+                alpha=alpha)  # fmt: skip
+    outline = _outline(vehicle, h.position[k], float(h.yaw[k]))
+    ax.plot(outline[:, 0], outline[:, 1], color="tab:red", alpha=alpha, lw=1.2)
+
+
+def plan_view_figure(result: SystemResult, vehicle: Vehicle, barrier, *, snapshots=6,
+                     title=None) -> Figure:  # fmt: skip
+    """The plan view at `snapshots` equally spaced times (the last one solid), the c.g.'s
+    path, the rail at its largest deflection, and the failed posts."""
+    h = result.history
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    n = h.time.shape[0]
+    picks = np.linspace(0, n - 1, snapshots).round().astype(int)
+    for k in picks:
+        _draw_plan(ax, result, vehicle, barrier, k, faded=k != picks[-1])
+        t = float(h.time[k])
+        ax.annotate(f"{t * 1e3:.0f} ms", np.asarray(h.position[k]), fontsize=7, color="tab:red")
+    ax.plot(np.asarray(h.position[:, 0]), np.asarray(h.position[:, 1]), ":", color="tab:red",
+            lw=0.8, label="c.g. path")  # fmt: skip
+    x = _rail_x(barrier)
+    if x is not None:
+        peak = int(np.argmax(np.max(np.asarray(h.rail_deflection), axis=1)))
+        ax.plot(x, np.asarray(h.rail_deflection[peak]), "--", color="tab:blue",
+                label=f"rail at its largest deflection ({float(result.dynamic_deflection):.2f} m)")  # fmt: skip
+        failed = np.asarray(barrier.post_nodes)[np.asarray(result.failed_posts)]
+        if failed.size:
+            ax.plot(x[failed], np.zeros(failed.size), "x", color="k", label="failed posts")
+    else:
+        ax.axhline(0.0, color="tab:blue", lw=2, label="rigid wall")
+    ax.set_aspect("equal")
+    ax.set_xlabel("along the barrier (m)")
+    ax.set_ylabel("lateral, towards the field side (m)")
+    ax.legend(loc="lower right", fontsize=8)
+    if title:
+        ax.set_title(title)
+    return fig
+
+
+def histories_figure(result: SystemResult, *, title=None) -> Figure:
+    """The vehicle's accelerations (its axes), yaw rate and speed; the contact force; the
+    rail's largest deflection; the energy audit's remainder."""
+    h = result.history
+    t = np.asarray(h.time) * 1e3
+    fig = Figure(figsize=(11, 7), layout="constrained")
+    axes = fig.subplots(3, 2, sharex=True).ravel()
+    acc = np.asarray(h.acceleration) / G
+    axes[0].plot(t, acc[:, 0], label="longitudinal")
+    axes[0].plot(t, acc[:, 1], label="lateral")
+    axes[0].set_ylabel("c.g. acceleration (g)")
+    axes[0].legend(fontsize=8)
+    axes[1].plot(t, np.degrees(np.asarray(h.yaw_rate)))
+    axes[1].set_ylabel("yaw rate (deg/s)")
+    axes[2].plot(t, np.hypot(*np.asarray(h.velocity).T) * 3.6)
+    axes[2].set_ylabel("speed (km/h)")
+    axes[3].plot(t, np.asarray(h.contact_force) / 1e3)
+    axes[3].set_ylabel("contact force (kN)")
+    axes[4].plot(t, np.max(np.asarray(h.rail_deflection), axis=1) * 1e3)
+    axes[4].set_ylabel("largest rail deflection (mm)")
+    axes[5].plot(t, np.asarray(h.energy_error))
+    axes[5].set_ylabel("energy audit remainder / KE0")
+    for ax in axes[4:]:
+        ax.set_xlabel("time (ms)")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def animate_plan_view(result: SystemResult, vehicle: Vehicle, barrier, path, *, frames=60,
+                      fps=15, title=None) -> Path:  # fmt: skip
+    """The plan view, animated, written as a GIF to `path` (matplotlib's Pillow writer)."""
+    h = result.history
+    picks = np.linspace(0, h.time.shape[0] - 1, frames).round().astype(int)
+    fig = Figure(figsize=(9, 3.6), layout="constrained")
+    ax = fig.add_subplot()
+    positions = np.asarray(h.position)
+    x = _rail_x(barrier)
+    lateral = np.asarray(h.rail_deflection)
+    low = min(positions[:, 1].min(), 0.0) - 3.0
+    high = max(lateral.max() if x is not None else 0.0, 0.0) + 1.0
+    left = positions[:, 0].min() - 4.0
+    right = positions[:, 0].max() + 4.0
+
+    def draw(i):
+        ax.clear()
+        _draw_plan(ax, result, vehicle, barrier, picks[i])
+        ax.set_xlim(left, right)
+        ax.set_ylim(low, high)
+        ax.set_aspect("equal")
+        ax.set_title((title + ": " if title else "") + f"{float(h.time[picks[i]]) * 1e3:.0f} ms")
+
+    animation = FuncAnimation(fig, draw, frames=len(picks))
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    animation.save(path, writer=PillowWriter(fps=fps))
+    return path
