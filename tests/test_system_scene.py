@@ -1,0 +1,76 @@
+"""System scene files and `barrierjax run` on them: MASH 3-11 on the MGS (the crash-test
+numbers and verdicts, in JSON), and bad scenes refused in one line naming the key."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from barrierjax.cli import main
+from barrierjax.system import presets
+from barrierjax.system.scene import load_system_scene
+
+MASH_3_11 = Path(__file__).resolve().parent.parent / "examples" / "mash_3_11.toml"
+KEYS = ("contained", "exit_speed", "exit_angle", "dynamic_deflection", "working_width",
+        "oiv_x", "oiv_y", "ora_x", "ora_y", "asi", "thiv", "phd")  # fmt: skip
+
+
+def _run(capsys, *args):
+    status = main(list(args))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_the_mash_3_11_scene_reads_the_test_and_the_presets():
+    scene = load_system_scene(MASH_3_11)
+    assert scene.test == "MASH 3-11"
+    assert scene.speed == pytest.approx(100 / 3.6) and scene.angle_deg == 25.0
+    assert float(scene.vehicle.mass) == 2270.0
+    assert scene.barrier.post_nodes[1] - scene.barrier.post_nodes[0] == 4
+    # Every preset value says where it comes from, and the estimates say so.
+    for preset in (*presets.VEHICLES.values(), presets.MGS):
+        assert all(v.source for v in preset.fields.values())
+    assert "yaw_inertia" in presets.VEHICLES["2270P"].estimates()
+
+
+def test_run_mash_3_11_json_is_contained_and_redirected_within_the_limits(capsys, tmp_path):
+    status, out, err = _run(capsys, "run", str(MASH_3_11), "--json", "--no-plots")
+    assert status == 0, err
+    data = json.loads(out)
+    assert all(key in data for key in KEYS)
+    assert data["contained"] and data["redirected"]
+    assert -25.0 < data["exit_angle"] < 0.0  # redirected, below the impact angle
+    assert 0.3 < data["dynamic_deflection"] < 2.0
+    assert data["working_width"] >= data["dynamic_deflection"]
+    assert abs(data["oiv_x"]) < 12.2 and abs(data["oiv_y"]) < 12.2  # MASH limits
+    assert abs(data["ora_x"]) < 20.49 * 9.80665 and abs(data["ora_y"]) < 20.49 * 9.80665
+    assert data["energy_audit_error"] < 1e-4
+    assert data["standard"] == "MASH" and data["passed"]
+
+
+BASE = 'test = "MASH 3-11"\n[vehicle]\npreset = "2270P"\n[barrier]\npreset = "MGS"\n' \
+       'length = "53.34 m"\n[impact]\npoint = "20 m"\n'  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "old, new, key",
+    [
+        ('preset = "2270P"', 'preset = "2270X"', "[vehicle] preset"),
+        ('preset = "MGS"', 'preset = "G9"', "[barrier] preset"),
+        ('point = "20 m"', 'point = "80 m"', "impact_point"),
+        ('point = "20 m"', 'point = "20 m"\nangle = "95 deg"', "angle_deg"),
+        ('length = "53.34 m"', 'length = "53.34 m"\npost_spacing = "0 m"', "[barrier]"),
+        ('point = "20 m"', 'point = "20 kg"', "[impact] point"),
+        ('test = "MASH 3-11"', 'test = "MASH 9-99"', "test"),
+        ('[impact]', '[impact]\nspeeed = "1 m/s"', "[impact] speeed"),
+    ],
+)  # fmt: skip
+def test_bad_system_scenes_exit_2_with_one_line(capsys, tmp_path, old, new, key):
+    assert old in BASE
+    path = tmp_path / "scene.toml"
+    path.write_text(BASE.replace(old, new, 1))
+    status, out, err = _run(capsys, "run", str(path), "--no-plots")
+    assert status == 2, err
+    assert out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:") and key in lines[0], err
