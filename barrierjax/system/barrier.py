@@ -15,6 +15,7 @@ carries nothing after). An end anchor is a linear spring in x and in y at an end
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -136,7 +137,9 @@ def stable_step(g: Guardrail, contact_stiffness=0.0, safety=0.8) -> float:
     stiffness (and the posts', the anchors' and `contact_stiffness` on each node's lateral
     dof, a bound on what the vehicle's crush springs add) over the lumped mass (numpy:
     concrete data only)."""
-    K, _ = (np.asarray(a) for a in linear_matrices(g.rail))
+    with jax.ensure_compile_time_eval():  # concrete data, even inside a caller's jit
+        K = np.asarray(linear_matrices(g.rail)[0])
+        mass = np.asarray(lumped_mass(g))
     diagonal = np.zeros(K.shape[0])
     for node in g.post_nodes:
         diagonal[3 * node] += float(g.posts.longitudinal_stiffness)
@@ -145,7 +148,7 @@ def stable_step(g: Guardrail, contact_stiffness=0.0, safety=0.8) -> float:
         diagonal[3 * node : 3 * node + 2] += float(g.anchor_stiffness)
     diagonal[1::3] += float(contact_stiffness)
     K = K + np.diag(diagonal)
-    scale = 1 / np.sqrt(np.asarray(lumped_mass(g)))
+    scale = 1 / np.sqrt(mass)
     omega_max = np.sqrt(np.max(np.linalg.eigvalsh(scale[:, None] * K * scale[None, :])))
     return float(safety * 2.0 / omega_max)
 

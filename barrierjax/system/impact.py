@@ -27,7 +27,7 @@ from .._checks import in_range, positive
 from ..beam.model import init_sections, internal_forces
 from .barrier import Guardrail, RigidWall, anchor_forces, lumped_mass, post_forces, stable_step
 from .contact import face_contact
-from .vehicle import Vehicle, periphery, rotation, tyre_forces
+from .vehicle import Vehicle, contact_stiffness_bound, periphery, rotation, tyre_forces
 
 
 class SystemHistory(eqx.Module):
@@ -89,8 +89,14 @@ def system_impact(
         isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
     )
     if dt is None:
-        dt = 1e-4 if isinstance(barrier, RigidWall) else stable_step(barrier, _bound(vehicle))
-    elif concrete_rail and float(dt) > (largest := stable_step(barrier, _bound(vehicle), 1.0)):
+        dt = (
+            1e-4
+            if isinstance(barrier, RigidWall)
+            else stable_step(barrier, contact_stiffness_bound(vehicle))
+        )
+    elif concrete_rail and float(dt) > (
+        largest := stable_step(barrier, contact_stiffness_bound(vehicle), 1.0)
+    ):
         raise ValueError(
             f"dt must be at most the central differences' stable step, {largest:.3g} s for "
             f"this rail; got {dt!r}"
@@ -107,11 +113,6 @@ def system_impact(
     n_saved = n_steps // save_every
     return _integrate(vehicle, barrier, speed, angle, impact_point, jnp.asarray(friction),
                       dt=dt, n_saved=n_saved, save_every=save_every)  # fmt: skip
-
-
-def _bound(v: Vehicle):
-    """A bound on the crush springs' stiffness on one rail node (for the stable step)."""
-    return float(v.crush_stiffness) * float(v.length)
 
 
 class _Loads(eqx.Module):

@@ -185,10 +185,14 @@ def parse_system_scene(data: Mapping) -> SystemScene:
         barrier = _barrier(b_name, b_values, b_table)
     except (TypeError, ValueError) as error:
         raise SceneFileError("barrier", None, _missing(error, "barrier")) from None
-    return SystemScene(car, barrier, i_values["speed"], i_values["angle"], i_values["point"],
-                       i_values["duration"], i_values["friction"],
-                       None if test is None else test.label, v_name or "vehicle",
-                       b_name or "barrier")  # fmt: skip
+    return SystemScene(
+        car,
+        barrier,
+        *(float(i_values[k]) for k in ("speed", "angle", "point", "duration", "friction")),
+        None if test is None else test.label,
+        v_name or "vehicle",
+        b_name or "barrier",
+    )
 
 
 def _missing(error, section) -> str:

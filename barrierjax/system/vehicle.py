@@ -102,6 +102,13 @@ def periphery(v: Vehicle):
     )
 
 
+def contact_stiffness_bound(v: Vehicle) -> float:
+    """A bound on what the crush springs add to one rail node's stiffness (every point at
+    once), for the stable step (`barrier.stable_step`): concrete data only."""
+    k, length, width = (float(np.asarray(x)) for x in (v.crush_stiffness, v.length, v.width))
+    return k * (length + width)
+
+
 def wheels(v: Vehicle):
     """The four wheels in body axes (4, 2) and their static loads (4,): the axle loads split
     by the c.g.'s place on the wheelbase, half to each side."""
