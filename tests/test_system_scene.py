@@ -33,8 +33,9 @@ def test_the_mash_3_11_scene_reads_the_test_and_the_presets():
     assert "yaw_inertia" in presets.VEHICLES["2270P"].estimates()
 
 
-def test_run_mash_3_11_json_is_contained_and_redirected_within_the_limits(capsys, tmp_path):
-    status, out, err = _run(capsys, "run", str(MASH_3_11), "--json", "--no-plots")
+@pytest.mark.parametrize("scene", [MASH_3_11, MASH_3_11.with_name("mash_3_10.toml")])
+def test_run_mash_json_is_contained_and_redirected_within_the_limits(capsys, scene):
+    status, out, err = _run(capsys, "run", str(scene), "--json", "--no-plots")
     assert status == 0, err
     data = json.loads(out)
     assert all(key in data for key in KEYS)
