@@ -35,6 +35,7 @@ import hashlib
 import math
 import os
 import pickle
+import platform
 import tempfile
 import warnings
 from importlib import metadata
@@ -129,11 +130,24 @@ def _key(jitted, args, static) -> str | None:
     avals = [None if a is None else (a.shape, str(a.dtype), a.weak_type) for a in args]
     settings = [jax.config.jax_enable_x64, jax.config.jax_numpy_dtype_promotion,
                 jax.config.jax_default_matmul_precision, os.environ.get("XLA_FLAGS", ""),
-                str(jax.devices()[0])]  # fmt: skip
+                str(jax.devices()[0]), _machine()]  # fmt: skip
     versions = [metadata.version(name) for name in ("jax", "jaxlib", "equinox", "diffrax")]
     name = f"{jitted.__module__}.{jitted.__qualname__}"
     text = repr((name, options, avals, settings, versions, _source_digest()))
     return f"{jitted.__name__.strip('_')}-{hashlib.sha256(text.encode()).hexdigest()[:32]}"
+
+
+@functools.cache
+def _machine() -> str:
+    """The processor's features (an executable is compiled for them): a cache folder shared
+    between machines keeps each one's apart."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith(("flags", "Features")):
+                return line
+    except OSError:
+        pass
+    return f"{platform.machine()} {platform.processor()}"
 
 
 @functools.cache
@@ -149,7 +163,7 @@ def _source_digest() -> str:
 
 def _load(key):
     """(the executable stored under `key`, its output tree), or None where there is none or
-    it does not load (from another machine, or damaged: it is compiled again)."""
+    it does not load (a damaged file, another jax's: it is compiled again)."""
     import jax
     from jax.experimental import serialize_executable
 

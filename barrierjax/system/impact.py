@@ -88,6 +88,12 @@ def system_impact(
     concrete_rail = isinstance(barrier, Guardrail) and not any(
         isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
     )
+    if concrete_rail:
+        length = float(np.asarray(barrier.rail.coords)[-1, 0])
+        if not isinstance(impact_point, jax.core.Tracer) and not 0 < float(impact_point) < length:
+            raise ValueError(
+                f"impact_point must lie on the rail, in (0, {length:g}) m; got {impact_point!r}"
+            )
     if dt is None:
         dt = (
             1e-4
@@ -102,12 +108,6 @@ def system_impact(
             f"this rail; got {dt!r}"
         )
     dt = float(dt)
-    if concrete_rail:
-        length = float(np.asarray(barrier.rail.coords)[-1, 0])
-        if not isinstance(impact_point, jax.core.Tracer) and not 0 < float(impact_point) < length:
-            raise ValueError(
-                f"impact_point must lie on the rail, in (0, {length:g}) m; got {impact_point!r}"
-            )
     n_steps = int(np.ceil(float(duration) / dt))
     save_every = int(save_every)
     n_saved = n_steps // save_every
