@@ -46,6 +46,7 @@ def test_run_mash_json_is_contained_and_redirected_within_the_limits(capsys, sce
     assert abs(data["oiv_x"]) < 12.2 and abs(data["oiv_y"]) < 12.2  # MASH limits
     assert abs(data["ora_x"]) < 20.49 * 9.80665 and abs(data["ora_y"]) < 20.49 * 9.80665
     assert data["energy_audit_error"] < 1e-4
+    assert data["exit_box"] is not None and data["exit_box"]["passed"]
     assert data["standard"] == "MASH" and data["passed"]
 
 

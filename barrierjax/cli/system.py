@@ -23,7 +23,7 @@ def system_dict(scene, result, name: str) -> dict:
 
     from ..assess import judge
     from ..assess.verdict import standard_name
-    from ..system.assessment import summary, system_occupant_risk
+    from ..system.assessment import summary, system_exit_box, system_occupant_risk
 
     numbers = {k: v.item() for k, v in jax.tree.map(np.asarray, summary(result)).items()}
     numbers["contained"] = bool(numbers["contained"])
@@ -31,6 +31,11 @@ def system_dict(scene, result, name: str) -> dict:
     standard = "en1317" if scene.test and scene.test.startswith("EN") else "mash"
     criteria = judge(risk, standard)
     energies = {k: float(v) for k, v in result.energies.items()}
+    box = system_exit_box(result, scene.vehicle, "MASH" if standard == "mash" else "CEN car")
+    exit_box = None
+    if box is not None:
+        exit_box = {"passed": bool(box.passed), "largest_offset_m": float(box.largest_offset),
+                    "margin_m": float(box.margin)}  # fmt: skip
     failed = np.asarray(result.failed_posts)
     return {
         "scene": name,
@@ -52,7 +57,10 @@ def system_dict(scene, result, name: str) -> dict:
         "energy_audit_error": float(np.max(np.abs(np.asarray(result.history.energy_error)))),
         "standard": standard_name(standard),
         "verdicts": {c.name: c.verdict for c in criteria},
-        "passed": bool(numbers["contained"]) and all(c.passed for c in criteria),
+        "exit_box": exit_box,
+        "passed": bool(numbers["contained"])
+        and all(c.passed for c in criteria)
+        and (exit_box is None or exit_box["passed"]),
     }
 
 
@@ -89,6 +97,7 @@ def format_system_summary(data: dict) -> str:
                 f"{data['phd'] / G:6.2f} g"
             ),
             f"  ASI                           {data['asi']:10.2f}",
+            f"  exit box                      {_exit_box_line(data['exit_box'])}",
             f"  {data['standard']}: {'pass' if data['passed'] else 'FAIL'} ({verdicts})",
             "",
             f"Energy audit (vehicle kinetic energy {kinetic / 1e3:.1f} kJ)",
@@ -104,6 +113,13 @@ def format_system_summary(data: dict) -> str:
             f"  largest remainder           {data['energy_audit_error']:.1e} of the initial",
         ]
     )
+
+
+def _exit_box_line(box) -> str:
+    if box is None:
+        return "undetermined (still in contact at the end of the run)"
+    verdict = "pass" if box["passed"] else "FAIL"
+    return f"{verdict} (largest offset {box['largest_offset_m']:.2f} m, margin {box['margin_m']:.2f} m)"
 
 
 def run_system(args, scene, name: str) -> int:

@@ -3,9 +3,12 @@ vehicle's c.g. accelerations and yaw rate (`barrierjax.assess.occupant_risk`), c
 and redirection, and the numbers a test report lists (`summary`)."""
 
 import jax.numpy as jnp
+import numpy as np
 
-from ..assess import OccupantRisk, occupant_risk
+from ..assess import ExitBoxCheck, OccupantRisk, exit_box_check, occupant_risk
+from ..assess.matrices import cen_exit_box, mash_exit_box
 from .impact import SystemResult
+from .vehicle import Vehicle, rotation
 
 
 def system_occupant_risk(result: SystemResult, **options) -> OccupantRisk:
@@ -45,3 +48,30 @@ def summary(result: SystemResult) -> dict:
         "phd": risk.phd,
     }
     return {key: jnp.asarray(value) for key, value in values.items()}
+
+
+def system_exit_box(
+    result: SystemResult, vehicle: Vehicle, box: str = "MASH"
+) -> ExitBoxCheck | None:
+    """The exit-box check (`assess.exit_box_check`; MASH's box, or EN 1317's "CEN car" or
+    "CEN heavy") of the vehicle's outline after it loses contact with the barrier: its
+    furthest point towards the road at each saved time, from the last saved contact on
+    (extended along its last direction where the run ends short of the box's length).
+    None where the vehicle is still in contact at the end of the run. Concrete results
+    only (the loss of contact is found in numpy)."""
+    h = result.history
+    in_contact = np.flatnonzero(np.asarray(h.contact_force) > 0.0)
+    if in_contact.size == 0 or in_contact[-1] >= h.time.shape[0] - 2:
+        return None
+    start = in_contact[-1] + 1
+    f, b, L = (float(np.asarray(x)) for x in (vehicle.front_to_cg, 0.5 * vehicle.width,
+                                                vehicle.length))  # fmt: skip
+    corners = np.array([[f, -b], [f, b], [f - L, b], [f - L, -b]])
+    positions, yaws = np.asarray(h.position)[start:], np.asarray(h.yaw)[start:]
+    nearest_road = np.array([np.min((corners @ np.asarray(rotation(p)).T + x)[:, 1])
+                             for x, p in zip(positions, yaws)])  # fmt: skip
+    if box == "MASH":
+        width_a, length_b = mash_exit_box(L, 2 * b)
+    else:
+        width_a, length_b = cen_exit_box(L, 2 * b, heavy=box == "CEN heavy")
+    return exit_box_check(positions[:, 0], -nearest_road, width_a, length_b)

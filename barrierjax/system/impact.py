@@ -51,8 +51,8 @@ class SystemResult(eqx.Module):
     kinetic_energy: jnp.ndarray  # initial, J
     energies: dict  # final works (J): rail, posts, anchors, contact (crush and its friction,
     # contact_friction), tyres, and the final kinetic energy
-    exit_speed: jnp.ndarray  # m/s, at the end
-    exit_angle_deg: jnp.ndarray  # of the c.g.'s velocity to the rail, towards the road < 0
+    exit_speed: jnp.ndarray  # m/s, at the loss of contact (or the end, still in contact)
+    exit_angle_deg: jnp.ndarray  # of the c.g.'s velocity to the rail there; towards the road < 0
     dynamic_deflection: jnp.ndarray  # m, the rail's largest lateral displacement
     working_width: jnp.ndarray  # m, from the rail's face: rail, or vehicle, whichever is further
     failed_posts: jnp.ndarray  # (n_posts,) bool
@@ -245,8 +245,12 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
     history = SystemHistory(times, X, psi, V, w, acc, deflection, post_f, contact_f, error)
     names = ("rail", "posts", "anchors", "contact", "tyres", "contact_friction")
     energies = {name: final.works[k] for k, name in enumerate(names)} | {"kinetic": kinetic[-1]}
-    exit_speed = jnp.sqrt(jnp.sum(V[-1] ** 2))
-    exit_angle = jnp.degrees(jnp.arctan2(V[-1, 1], V[-1, 0]))
+    # At the loss of contact: the first sample after the last one in contact (the last
+    # sample where the vehicle is still in contact at the end).
+    index = jnp.arange(n_saved)
+    lost = jnp.minimum(jnp.max(jnp.where(contact_f > 0.0, index, -1)) + 1, n_saved - 1)
+    exit_speed = jnp.sqrt(jnp.sum(V[lost] ** 2))
+    exit_angle = jnp.degrees(jnp.arctan2(V[lost, 1], V[lost, 0]))
     dynamic = jnp.max(deflection) if rail is not None else zero
     outline_y = jax.vmap(lambda x, p: (x + body_points @ rotation(p).T)[:, 1])(X, psi)
     working = jnp.maximum(dynamic, jnp.max(outline_y))
