@@ -166,3 +166,25 @@ def test_gradients_match_finite_differences():
 def test_bad_inputs_name_the_field(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_critical_impact_point_sweep_equals_single_runs_and_picks_the_largest():
+    from barrierjax.system.critical import critical_impact_point
+
+    rail = _rail()
+    dt = system.stable_step(rail, 1.5e6 * CAR["length"])
+    points = jnp.asarray([6.0, 7.0, 8.0])
+    options = {"speed": 25.0, "angle_deg": 25.0, "duration": 0.2, "dt": dt, "save_every": 10}
+    sweep = critical_impact_point(_car(), rail, points, **options)
+    single = [
+        float(
+            system.system_impact(_car(), rail, impact_point=float(p), **options).dynamic_deflection
+        )
+        for p in points
+    ]
+    np.testing.assert_allclose(np.asarray(sweep.values), single, rtol=1e-9)
+    assert float(sweep.critical) == float(points[int(np.argmax(single))])
+    with pytest.raises(ValueError, match="points"):
+        critical_impact_point(_car(), rail, jnp.asarray([-1.0]), **options)
+    with pytest.raises(ValueError, match="criterion"):
+        critical_impact_point(_car(), rail, points, criterion="nope", **options)

@@ -13,19 +13,22 @@ from .vehicle import Vehicle, rotation
 
 def system_occupant_risk(result: SystemResult, **options) -> OccupantRisk:
     """`occupant_risk` of the vehicle's accelerations (its axes: x forward, y left) and yaw
-    rate over the run; `options` go to `occupant_risk` (e.g. `asi_edition`)."""
+    rate over the run (or each run of a batch); `options` go to `occupant_risk` (e.g.
+    `asi_edition`)."""
     h = result.history
-    return occupant_risk(h.time, h.acceleration[..., 0], h.acceleration[..., 1],
-                         h.yaw_rate, **options)  # fmt: skip
+    # A batch of runs (a vmap of `system_impact`) shares its times: the first row's.
+    t = h.time[(0,) * (h.time.ndim - 1)]
+    return occupant_risk(t, h.acceleration[..., 0], h.acceleration[..., 1], h.yaw_rate,
+                         **options)  # fmt: skip
 
 
 def contained(result: SystemResult):
     """Contained and redirected: at the end the vehicle's c.g. is on the road side of the
     rail's line (y < 0) and moves away from it, or has come to rest."""
     h = result.history
-    leaving = h.velocity[-1, 1] < 0.0
+    leaving = h.velocity[..., -1, 1] < 0.0
     at_rest = result.exit_speed < 0.5
-    return (h.position[-1, 1] < 0.0) & (leaving | at_rest)
+    return (h.position[..., -1, 1] < 0.0) & (leaving | at_rest)
 
 
 def summary(result: SystemResult) -> dict:
