@@ -76,3 +76,13 @@ def test_bad_system_scenes_exit_2_with_one_line(capsys, tmp_path, old, new, key)
     assert out == ""
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith("error:") and key in lines[0], err
+
+
+def test_a_rigid_wall_scene_redirects_the_pickup(capsys, tmp_path):
+    path = tmp_path / "wall.toml"
+    path.write_text(BASE.replace('preset = "MGS"\nlength = "53.34 m"', 'preset = "rigid wall"'))
+    status, out, err = _run(capsys, "run", str(path), "--json", "--no-plots")
+    assert status == 0, err
+    data = json.loads(out)
+    assert data["contained"] and data["dynamic_deflection"] == 0.0
+    assert data["barrier"] == "rigid wall" and data["failed_posts"] == 0

@@ -27,6 +27,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import jax.numpy as jnp
+
 from ..assess.matrices import crash_test
 from ..beam.layered import LayeredSection
 from ..materials.plasticity import RateIndependentPlasticity
@@ -204,8 +206,8 @@ def _missing(error, section) -> str:
 
 
 def _barrier(name, values, table):
-    if name == "rigid wall":
-        return RigidWall(-1e3 + 0.0 * values.get("length", 0.0), values.get("length", 1e3))
+    if name == "rigid wall":  # from 100 m upstream of the impact to `length`
+        return RigidWall(jnp.asarray(-100.0), jnp.asarray(values.get("length", 100.0)))
     law = RateIndependentPlasticity(values["elastic_modulus"], values["yield_stress"])
     section: LayeredSection = rail_section(values["rail_area"], values["rail_second_moment"], law)
     posts = post_springs(values["post_stiffness"], values["post_strength"],
