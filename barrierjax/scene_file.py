@@ -109,20 +109,41 @@ class Field:
 FIELDS: dict[str, dict[str, Field]] = {
     "barrier": {
         "plastic_moment": Field(
-            "barrier", "plastic_moment", "plastic_moment", "a moment (force*length)",
-            "[force]*[length]", "N*m", "100 kN*m",
+            "barrier",
+            "plastic_moment",
+            "plastic_moment",
+            "a moment (force*length)",
+            "[force]*[length]",
+            "N*m",
+            "100 kN*m",
         ),
         "mass_per_length": Field(
-            "barrier", "mass_per_length", "mass_per_length", "a mass per length",
-            "[mass]/[length]", "kg/m", "60 kg/m",
+            "barrier",
+            "mass_per_length",
+            "mass_per_length",
+            "a mass per length",
+            "[mass]/[length]",
+            "kg/m",
+            "60 kg/m",
         ),
         "backing_strength": Field(
-            "barrier", "backing_strength", "backing_strength", "a force per length",
-            "[force]/[length]", "N/m", "60 kN/m",
+            "barrier",
+            "backing_strength",
+            "backing_strength",
+            "a force per length",
+            "[force]/[length]",
+            "N/m",
+            "60 kN/m",
         ),
         "axial_capacity": Field(
-            "barrier", "axial_capacity", "axial_capacity", "a force",
-            "[force]", "N", "1.5 MN", required=False,
+            "barrier",
+            "axial_capacity",
+            "axial_capacity",
+            "a force",
+            "[force]",
+            "N",
+            "1.5 MN",
+            required=False,
         ),
     },
     "vehicle": {
@@ -133,15 +154,32 @@ FIELDS: dict[str, dict[str, Field]] = {
     },
     "impact": {
         "speed": Field(
-            "impact", "speed", "speed", "a speed (length/time)", "[length]/[time]", "m/s",
+            "impact",
+            "speed",
+            "speed",
+            "a speed (length/time)",
+            "[length]/[time]",
+            "m/s",
             "40 km/h",
         ),
         "angle": Field(
-            "impact", "angle", "angle_deg", "an angle", "angle", "deg", "90 deg",
+            "impact",
+            "angle",
+            "angle_deg",
+            "an angle",
+            "angle",
+            "deg",
+            "90 deg",
             required=False,
         ),
         "friction": Field(
-            "impact", "friction", "friction", "a dimensionless number", None, "", "0.1",
+            "impact",
+            "friction",
+            "friction",
+            "a dimensionless number",
+            None,
+            "",
+            "0.1",
             required=False,
         ),
     },
@@ -149,9 +187,7 @@ FIELDS: dict[str, dict[str, Field]] = {
 
 # "Barrier.plastic_moment" (as the constructors and `simulate` name a field) -> Field.
 _BY_CONSTRUCTOR_NAME = {
-    field.constructor_name: field
-    for section in FIELDS.values()
-    for field in section.values()
+    field.constructor_name: field for section in FIELDS.values() for field in section.values()
 }
 
 
@@ -206,8 +242,9 @@ def parse_quantity(value, field: Field) -> float:
         quantity = units.registry().Quantity(value)
         float(quantity.magnitude)  # complex or array magnitudes fail here
     except Exception:  # pint raises many kinds (UndefinedUnitError, AssertionError, ...)
-        raise fail(f"{expected}, got '{value}', which is not a quantity "
-                   f"(write e.g. '{field.example}')") from None
+        raise fail(
+            f"{expected}, got '{value}', which is not a quantity (write e.g. '{field.example}')"
+        ) from None
     if field.dimension is None:
         # A dimensionless number; an angle is dimensionless to pint but not a friction.
         if not quantity.dimensionless or (not quantity.unitless and _is_angle(quantity)):
@@ -236,9 +273,7 @@ def parse_scene(data: Mapping) -> Scene:
         raise SceneFileError(None, None, f"a scene is a table of sections, got {got}")
     for section in data:
         if section not in FIELDS:
-            raise SceneFileError(
-                section, None, f"unknown section (expected {_names(FIELDS)})"
-            )
+            raise SceneFileError(section, None, f"unknown section (expected {_names(FIELDS)})")
     values: dict[str, dict[str, float]] = {}
     raw: dict[tuple[str, str], object] = {}
     for section, fields in FIELDS.items():
@@ -279,20 +314,25 @@ def parse_scene(data: Mapping) -> Scene:
     return Scene(parts["barrier"], parts["vehicle"], parts["impact"])
 
 
-def load_scene(path) -> Scene:
-    """Read the TOML scene file at `path` (see the module docstring) as a `Scene` in SI
-    units. Raises `SceneFileError` for an unreadable file, invalid TOML or a bad key."""
+def read_toml(path) -> Mapping:
+    """The tables of the TOML file at `path`. Raises `SceneFileError` for an unreadable
+    file or invalid TOML."""
     path = Path(path)
     try:
         with path.open("rb") as file:
-            data = tomllib.load(file)
+            return tomllib.load(file)
     except FileNotFoundError:
         raise SceneFileError(None, str(path), "no such file") from None
     except OSError as error:
         raise SceneFileError(None, str(path), error.strerror or str(error)) from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise SceneFileError(None, str(path), f"invalid TOML: {error}") from None
-    return parse_scene(data)
+
+
+def load_scene(path) -> Scene:
+    """Read the TOML scene file at `path` (see the module docstring) as a `Scene` in SI
+    units. Raises `SceneFileError` for an unreadable file, invalid TOML or a bad key."""
+    return parse_scene(read_toml(path))
 
 
 def default_scene_path():

@@ -229,22 +229,6 @@ def _scene_error(error: Exception) -> CommandError:
     return CommandError(message)
 
 
-def _system_scene(path):
-    """The `SystemScene` of the file at `path` if it is one (a crash test of a barrier
-    system: `barrierjax.system.scene`), else None (the file is read again as a scene of
-    report 3)."""
-    import tomllib
-
-    try:
-        with open(path, "rb") as file:
-            data = tomllib.load(file)
-    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
-        return None  # load_scene words the error
-    from ..system.scene import is_system_scene, parse_system_scene
-
-    return parse_system_scene(data) if is_system_scene(data) else None
-
-
 def run_command(args) -> int:
     """`barrierjax run [SCENE.toml | cantilever-N]`: returns the exit status."""
     import jax
@@ -260,12 +244,14 @@ def run_command(args) -> int:
         scene = scene_file.default_scene()
     else:
         name = str(args.scene)
-        system = _system_scene(args.scene)
-        if system is not None:
+        data = scene_file.read_toml(args.scene)
+        from ..system.scene import is_system_scene, parse_system_scene
+
+        if is_system_scene(data):  # a crash test of a barrier system
             from .system import run_system
 
-            return run_system(args, system, name)
-        scene = scene_file.load_scene(args.scene)
+            return run_system(args, parse_system_scene(data), name)
+        scene = scene_file.parse_scene(data)
     try:
         with progress_after("compiling and solving the impact model (report 3.2/3.3)..."):
             result = simulate(scene)

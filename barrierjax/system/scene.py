@@ -22,17 +22,15 @@ duration = "0.6 s"
 Every error is a `SceneFileError` whose one-line message starts with the key.
 """
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
 
 import jax.numpy as jnp
 
 from ..assess.matrices import crash_test
 from ..beam.layered import LayeredSection
 from ..materials.plasticity import RateIndependentPlasticity
-from ..scene_file import Field, SceneFileError, parse_quantity
+from ..scene_file import Field, SceneFileError, parse_quantity, read_toml
 from . import presets
 from .barrier import Guardrail, RigidWall, guardrail, post_springs, rail_section
 from .vehicle import Vehicle, vehicle
@@ -221,12 +219,4 @@ def _barrier(name, values, table):
 
 def load_system_scene(path) -> SystemScene:
     """Read the system scene file at `path`."""
-    path = Path(path)
-    try:
-        with path.open("rb") as file:
-            data = tomllib.load(file)
-    except FileNotFoundError:
-        raise SceneFileError(None, str(path), "no such file") from None
-    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise SceneFileError(None, str(path), str(error)) from None
-    return parse_system_scene(data)
+    return parse_system_scene(read_toml(path))
