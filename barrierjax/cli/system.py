@@ -25,9 +25,9 @@ def system_dict(scene, result, name: str) -> dict:
     from ..assess.verdict import standard_name
     from ..system.assessment import summary, system_exit_box, system_occupant_risk
 
-    numbers = {k: v.item() for k, v in jax.tree.map(np.asarray, summary(result)).items()}
-    numbers["contained"] = bool(numbers["contained"])
     risk = system_occupant_risk(result)
+    numbers = {k: v.item() for k, v in jax.tree.map(np.asarray, summary(result, risk)).items()}
+    numbers["contained"] = bool(numbers["contained"])
     standard = "en1317" if scene.test and scene.test.startswith("EN") else "mash"
     criteria = judge(risk, standard)
     energies = {k: float(v) for k, v in result.energies.items()}

@@ -8,7 +8,7 @@ import numpy as np
 from ..assess import ExitBoxCheck, OccupantRisk, exit_box_check, occupant_risk
 from ..assess.matrices import cen_exit_box, mash_exit_box
 from .impact import SystemResult
-from .vehicle import Vehicle, rotation
+from .vehicle import Vehicle, outline, rotation
 
 
 def system_occupant_risk(result: SystemResult, **options) -> OccupantRisk:
@@ -31,11 +31,12 @@ def contained(result: SystemResult):
     return (h.position[..., -1, 1] < 0.0) & (leaving | at_rest)
 
 
-def summary(result: SystemResult) -> dict:
+def summary(result: SystemResult, risk: OccupantRisk | None = None) -> dict:
     """The crash-test numbers of a run, SI: contained, exit speed and angle (degrees, of the
     c.g.'s velocity to the rail; negative: towards the road), dynamic deflection, working
-    width, and the occupant risk (OIV, ORA, ASI, THIV, PHD)."""
-    risk = system_occupant_risk(result)
+    width, and the occupant risk (OIV, ORA, ASI, THIV, PHD; `risk`, where the caller has
+    it already: `system_occupant_risk(result)`)."""
+    risk = system_occupant_risk(result) if risk is None else risk
     values = {
         "contained": contained(result),
         "exit_speed": result.exit_speed,
@@ -67,14 +68,13 @@ def system_exit_box(
     if in_contact.size == 0 or in_contact[-1] >= h.time.shape[0] - 2:
         return None
     start = in_contact[-1] + 1
-    f, b, L = (float(np.asarray(x)) for x in (vehicle.front_to_cg, 0.5 * vehicle.width,
-                                                vehicle.length))  # fmt: skip
-    corners = np.array([[f, -b], [f, b], [f - L, b], [f - L, -b]])
+    corners = np.asarray(outline(vehicle))
     positions, yaws = np.asarray(h.position)[start:], np.asarray(h.yaw)[start:]
     nearest_road = np.array([np.min((corners @ np.asarray(rotation(p)).T + x)[:, 1])
                              for x, p in zip(positions, yaws)])  # fmt: skip
+    L, width = float(np.asarray(vehicle.length)), float(np.asarray(vehicle.width))
     if box == "MASH":
-        width_a, length_b = mash_exit_box(L, 2 * b)
+        width_a, length_b = mash_exit_box(L, width)
     else:
-        width_a, length_b = cen_exit_box(L, 2 * b, heavy=box == "CEN heavy")
+        width_a, length_b = cen_exit_box(L, width, heavy=box == "CEN heavy")
     return exit_box_check(positions[:, 0], -nearest_road, width_a, length_b)

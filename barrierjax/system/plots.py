@@ -10,17 +10,16 @@ from matplotlib.figure import Figure
 
 from .barrier import Guardrail
 from .impact import SystemResult
-from .vehicle import Vehicle
+from .vehicle import Vehicle, outline
 
 G = 9.80665
 
 
 def _outline(v: Vehicle, position, yaw):
     """The vehicle's rectangle in global axes (5, 2), closed."""
-    f, b, L = float(v.front_to_cg), 0.5 * float(v.width), float(v.length)
-    body = np.array([[f, -b], [f, b], [f - L, b], [f - L, -b], [f, -b]])
+    body = np.asarray(outline(v))
     c, s = np.cos(yaw), np.sin(yaw)
-    return body @ np.array([[c, s], [-s, c]]) + np.asarray(position)
+    return np.vstack([body, body[:1]]) @ np.array([[c, s], [-s, c]]) + np.asarray(position)
 
 
 def _rail_x(barrier):

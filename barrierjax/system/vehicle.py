@@ -102,6 +102,14 @@ def periphery(v: Vehicle):
     )
 
 
+def outline(v: Vehicle):
+    """The rectangle's corners in body axes (4, 2): front right, front left, rear left,
+    rear right."""
+    front, back, half = v.front_to_cg, v.front_to_cg - v.length, 0.5 * v.width
+    return jnp.stack([jnp.stack([front, -half]), jnp.stack([front, half]),
+                      jnp.stack([back, half]), jnp.stack([back, -half])])  # fmt: skip
+
+
 def contact_stiffness_bound(v: Vehicle) -> float:
     """A bound on what the crush springs add to one rail node's stiffness (every point at
     once), for the stable step (`barrier.stable_step`): concrete data only."""
