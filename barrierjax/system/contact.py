@@ -22,7 +22,7 @@ def face_contact(points, velocities, crush, stiffness, strength, nodes, node_vel
     `nodes` (m, 2) moving at `node_velocities` (m, 2).
 
     Returns (force on each point (n, 2), force on each node (m, 2), new crush (n,), the
-    friction's power (<= 0), and each point's penetration delta (n,))."""
+    friction's power (<= 0))."""
     xs = nodes[:, 0]
     segment = jnp.clip(jnp.searchsorted(xs, points[:, 0]) - 1, 0, xs.shape[0] - 2)
     a, b = nodes[segment], nodes[segment + 1]
@@ -47,4 +47,4 @@ def face_contact(points, velocities, crush, stiffness, strength, nodes, node_vel
     on_nodes = jnp.zeros_like(nodes)
     on_nodes = on_nodes.at[segment].add(-weights[:, :1] * on_points)
     on_nodes = on_nodes.at[segment + 1].add(-weights[:, 1:] * on_points)
-    return on_points, on_nodes, crush, jnp.sum(drag * sliding), delta
+    return on_points, on_nodes, crush, jnp.sum(drag * sliding)

@@ -178,7 +178,7 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
             f_int = f_post = f_anchor = zero_dofs
             sections, plastic, failed = s.sections, s.plastic, s.failed
         nodes = rail_nodes + s.u.reshape(-1, 3)[:, :2]
-        on_points, on_nodes, crush, friction_power, _ = face_contact(
+        on_points, on_nodes, crush, friction_power = face_contact(
             s.X + r, point_velocity, s.crush, stiffness, strength, nodes,
             s.v.reshape(-1, 3)[:, :2], friction,
         )  # fmt: skip
