@@ -143,7 +143,7 @@ def _stiffness(strains, q, resultant, D):
     return material + geometric
 
 
-def _hermite(xi, L):
+def hermite_shape(xi, L):
     """Transverse shape functions (4,) for (w1, th1, w2, th2) and their x-derivatives."""
     n = jnp.stack(
         [
@@ -173,7 +173,7 @@ def local_mass(rho, A, I, L):
     xi = jnp.asarray((x + 1) / 2, dtype)
     w = jnp.asarray(w / 2, dtype)
     zero = jnp.zeros_like(xi)
-    n, dn = jax.vmap(lambda s: _hermite(s, L))(xi)
+    n, dn = jax.vmap(lambda s: hermite_shape(s, L))(xi)
     pu = jnp.stack([1 - xi, zero, zero, xi, zero, zero], axis=-1)
     pw = jnp.stack([zero, n[:, 0], n[:, 1], zero, n[:, 2], n[:, 3]], axis=-1)
     pr = jnp.stack([zero, dn[:, 0], dn[:, 1], zero, dn[:, 2], dn[:, 3]], axis=-1)

@@ -5,12 +5,14 @@ impact integrated by explicit central differences (`impact.system_impact`)."""
 
 from .barrier import Guardrail, Posts, RigidWall, guardrail, post_springs, rail_section, stable_step
 from .impact import SystemHistory, SystemResult, system_impact
+from .static import StaticPushover, static_pushover
 from .vehicle import Vehicle, vehicle
 
 __all__ = [
     "Guardrail",
     "Posts",
     "RigidWall",
+    "StaticPushover",
     "SystemHistory",
     "SystemResult",
     "Vehicle",
@@ -18,6 +20,7 @@ __all__ = [
     "post_springs",
     "rail_section",
     "stable_step",
+    "static_pushover",
     "system_impact",
     "vehicle",
 ]
