@@ -11,13 +11,14 @@ from .impact import SystemResult
 from .vehicle import Vehicle, outline, rotation
 
 
-def system_occupant_risk(result: SystemResult, **options) -> OccupantRisk:
+def system_occupant_risk(result: SystemResult, times=None, **options) -> OccupantRisk:
     """`occupant_risk` of the vehicle's accelerations (its axes: x forward, y left) and yaw
-    rate over the run (or each run of a batch); `options` go to `occupant_risk` (e.g.
-    `asi_edition`)."""
+    rate over the run (or each run of a batch); `times`: the samples' times where the
+    result is traced (under a caller's jit, vmap or grad: `impact.time_grid`); `options` go
+    to `occupant_risk` (e.g. `asi_edition`)."""
     h = result.history
     # A batch of runs (a vmap of `system_impact`) shares its times: the first row's.
-    t = h.time[(0,) * (h.time.ndim - 1)]
+    t = h.time[(0,) * (h.time.ndim - 1)] if times is None else times
     return occupant_risk(t, h.acceleration[..., 0], h.acceleration[..., 1], h.yaw_rate,
                          **options)  # fmt: skip
 

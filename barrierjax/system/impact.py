@@ -83,8 +83,6 @@ def system_impact(
     the guardrail's stable step, `barrier.stable_step`, or 1e-4 s for a wall)."""
     speed = positive("speed", speed)
     angle = jnp.radians(in_range("angle_deg", angle_deg, 0.0, 90.0))
-    if not (isinstance(duration, int | float) and 0 < duration < np.inf):
-        raise ValueError(f"duration must be a positive number of seconds; got {duration!r}")
     concrete_rail = isinstance(barrier, Guardrail) and not any(
         isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
     )
@@ -94,6 +92,20 @@ def system_impact(
             raise ValueError(
                 f"impact_point must lie on the rail, in (0, {length:g}) m; got {impact_point!r}"
             )
+    dt, times = time_grid(vehicle, barrier, duration, dt, save_every)
+    return _integrate(vehicle, barrier, speed, angle, impact_point, jnp.asarray(friction),
+                      dt=dt, n_saved=len(times), save_every=int(save_every))  # fmt: skip
+
+
+def time_grid(vehicle: Vehicle, barrier, duration, dt=None, save_every: int = 20):
+    """The step of `system_impact` (checked against the stable step where the guardrail is
+    concrete) and the times of its saved samples (numpy: concrete, for
+    `barrierjax.assess` under a caller's jit or vmap)."""
+    if not (isinstance(duration, int | float) and 0 < duration < np.inf):
+        raise ValueError(f"duration must be a positive number of seconds; got {duration!r}")
+    concrete_rail = isinstance(barrier, Guardrail) and not any(
+        isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
+    )
     if dt is None:
         dt = (
             1e-4
@@ -107,12 +119,9 @@ def system_impact(
             f"dt must be at most the central differences' stable step, {largest:.3g} s for "
             f"this rail; got {dt!r}"
         )
-    dt = float(dt)
-    n_steps = int(np.ceil(float(duration) / dt))
-    save_every = int(save_every)
-    n_saved = n_steps // save_every
-    return _integrate(vehicle, barrier, speed, angle, impact_point, jnp.asarray(friction),
-                      dt=dt, n_saved=n_saved, save_every=save_every)  # fmt: skip
+    dt, save_every = float(dt), int(save_every)
+    n_saved = int(np.ceil(float(duration) / dt)) // save_every
+    return dt, np.arange(n_saved) * (save_every * dt)
 
 
 class _Loads(eqx.Module):
