@@ -101,6 +101,10 @@ def test_guardrail_energy_audit_closes_and_converges_at_second_order():
                                  duration=0.4, dt=dt, save_every=10)  # fmt: skip
         errors.append(float(np.max(np.abs(np.asarray(r.history.energy_error)))))
         assert float(r.dynamic_deflection) > 0.1 and bool(jnp.all(jnp.isfinite(r.exit_speed)))
+        # The rail is pulled taut where it deflects, never past its plastic axial force.
+        tension = np.asarray(r.history.rail_tension)
+        assert tension.shape == (r.history.time.shape[0], len(rail.rail.connectivity))
+        assert 0.1 * 1.29e-3 * 345e6 < np.max(tension) <= 1.29e-3 * 345e6 * (1 + 1e-9)
     assert errors[0] < 1e-4
     assert errors[1] < errors[0] / 2.5  # second order: a quarter, give or take
 

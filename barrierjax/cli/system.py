@@ -52,6 +52,10 @@ def system_dict(scene, result, name: str) -> dict:
         **numbers,
         "redirected": bool(numbers["contained"] and numbers["exit_angle"] < 0.0),
         "failed_posts": int(failed.sum()),
+        "rail_tension_peak": float(np.max(np.asarray(result.history.rail_tension), initial=0.0)),
+        "post_force_peak": float(
+            np.max(np.abs(np.asarray(result.history.post_force)), initial=0.0)
+        ),
         "kinetic_energy_J": float(result.kinetic_energy),
         "energies_J": energies,
         "energy_audit_error": float(np.max(np.abs(np.asarray(result.history.energy_error)))),
@@ -90,6 +94,10 @@ def format_system_summary(data: dict) -> str:
             f"  dynamic deflection            {data['dynamic_deflection']:10.3f} m",
             f"  working width (from the face) {data['working_width']:10.3f} m",
             f"  failed posts                  {data['failed_posts']:10d}",
+            (
+                f"  peak rail tension, post force {data['rail_tension_peak'] / 1e3:10.1f} kN "
+                f"{data['post_force_peak'] / 1e3:7.1f} kN"
+            ),
             f"  OIV x, y                      {data['oiv_x']:10.2f} {data['oiv_y']:7.2f} m/s",
             f"  ORA x, y                      {data['ora_x'] / G:10.2f} {data['ora_y'] / G:7.2f} g",
             (

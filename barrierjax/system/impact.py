@@ -41,6 +41,7 @@ class SystemHistory(eqx.Module):
     acceleration: jnp.ndarray  # (n, 2) the c.g.'s in the vehicle's axes (x forward, y left),
     # the mean over the interval that starts at the sample
     rail_deflection: jnp.ndarray  # (n, n_nodes) lateral displacement (towards the field side)
+    rail_tension: jnp.ndarray  # (n, n_elements) each element's axial force (N; tension > 0)
     post_force: jnp.ndarray  # (n, n_posts) lateral
     contact_force: jnp.ndarray  # (n,) total normal force between vehicle and barrier
     energy_error: jnp.ndarray  # (n,) the audit's remainder over the initial kinetic energy
@@ -179,12 +180,16 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
         r = body_points @ rotation(s.psi).T
         point_velocity = s.V + s.w * jnp.stack([-r[:, 1], r[:, 0]], -1)
         if rail is not None:
-            f_int, (stress, state, *_) = internal_forces(rail.rail, s.u, s.u_old, *s.sections, dt)
+            f_int, (stress, state, axial, *_) = internal_forces(
+                rail.rail, s.u, s.u_old, *s.sections, dt
+            )
+            tension = jnp.mean(axial, -1)
             sections = (stress, state)
             f_post, plastic, failed = post_forces(rail, s.u, s.plastic, s.failed)
             f_anchor = anchor_forces(rail, s.u)
         else:
             f_int = f_post = f_anchor = zero_dofs
+            tension = jnp.zeros(0)
             sections, plastic, failed = s.sections, s.plastic, s.failed
         nodes = rail_nodes + s.u.reshape(-1, 3)[:, :2]
         on_points, on_nodes, crush, friction_power = face_contact(
@@ -196,10 +201,10 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
         contact_moment = jnp.sum(r[:, 0] * on_points[:, 1] - r[:, 1] * on_points[:, 0])
         acting = _Loads(f_int, f_post, f_anchor, on_rail, jnp.sum(on_points, 0),
                         contact_moment, tyre_force, tyre_moment)  # fmt: skip
-        return acting, sections, crush, plastic, failed, friction_power, on_points
+        return acting, sections, crush, plastic, failed, friction_power, on_points, tension
 
     def step(s: _State, _):
-        now, sections, crush, plastic, failed, friction_power, on_points = loads(s)
+        now, sections, crush, plastic, failed, friction_power, on_points, tension = loads(s)
         a_rail = (now.contact - now.internal - now.posts - now.anchors) / mass
         force = now.contact_force + now.tyre_force
         moment = now.contact_moment + now.tyre_moment
@@ -227,7 +232,8 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
             kinetic = kinetic + 0.5 * jnp.sum(mass * v_mid**2)
         error = (kinetic0 - kinetic - jnp.sum(works[:5])) / kinetic0
         acceleration = rotation(s.psi).T @ (force / vehicle.mass)
-        out = (s.X, s.psi, V_mid, w_mid, acceleration, s.u[1::3], _lateral(now.posts, rail),
+        out = (s.X, s.psi, V_mid, w_mid, acceleration, s.u[1::3], tension,
+               _lateral(now.posts, rail),
                -jnp.sum(on_points[:, 1]), error, kinetic)  # fmt: skip
         u_next = s.u + dt * v if rail is not None else s.u
         s = _State(s.X + dt * V, s.psi + dt * w, V, w, s.X, s.psi, u_next, s.u, v, sections,
@@ -249,9 +255,10 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
                    jnp.zeros(body_points.shape[0]), jnp.zeros((n_posts, 2)),
                    jnp.zeros(n_posts, bool), jnp.zeros(6), nothing)  # fmt: skip
     final, outs = jax.lax.scan(saved, start, None, length=n_saved)
-    X, psi, V, w, acc, deflection, post_f, contact_f, error, kinetic = outs
+    X, psi, V, w, acc, deflection, tension, post_f, contact_f, error, kinetic = outs
     times = jnp.arange(n_saved, dtype=kinetic0.dtype) * (save_every * dt)
-    history = SystemHistory(times, X, psi, V, w, acc, deflection, post_f, contact_f, error)
+    history = SystemHistory(times, X, psi, V, w, acc, deflection, tension, post_f, contact_f,
+                            error)  # fmt: skip
     names = ("rail", "posts", "anchors", "contact", "tyres", "contact_friction")
     energies = {name: final.works[k] for k, name in enumerate(names)} | {"kinetic": kinetic[-1]}
     # At the loss of contact: the first sample after the last one in contact (the last

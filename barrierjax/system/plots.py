@@ -74,8 +74,8 @@ def plan_view_figure(result: SystemResult, vehicle: Vehicle, barrier, *, snapsho
 
 
 def histories_figure(result: SystemResult, *, title=None) -> Figure:
-    """The vehicle's accelerations (its axes), yaw rate and speed; the contact force; the
-    rail's largest deflection; the energy audit's remainder."""
+    """The vehicle's accelerations (its axes), yaw rate and speed; the contact force and the
+    rail's largest tension; the rail's largest deflection; the energy audit's remainder."""
     h = result.history
     t = np.asarray(h.time) * 1e3
     fig = Figure(figsize=(11, 7), layout="constrained")
@@ -89,8 +89,12 @@ def histories_figure(result: SystemResult, *, title=None) -> Figure:
     axes[1].set_ylabel("yaw rate (deg/s)")
     axes[2].plot(t, np.hypot(*np.asarray(h.velocity).T) * 3.6)
     axes[2].set_ylabel("speed (km/h)")
-    axes[3].plot(t, np.asarray(h.contact_force) / 1e3)
-    axes[3].set_ylabel("contact force (kN)")
+    axes[3].plot(t, np.asarray(h.contact_force) / 1e3, label="contact force")
+    tension = np.asarray(h.rail_tension)
+    if tension.shape[-1]:
+        axes[3].plot(t, np.max(tension, axis=1) / 1e3, label="largest rail tension")
+    axes[3].set_ylabel("force (kN)")
+    axes[3].legend(fontsize=8)
     axes[4].plot(t, np.max(np.asarray(h.rail_deflection), axis=1) * 1e3)
     axes[4].set_ylabel("largest rail deflection (mm)")
     axes[5].plot(t, np.asarray(h.energy_error))
