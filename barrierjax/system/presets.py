@@ -36,26 +36,48 @@ class Preset:
         return [key for key, v in self.fields.items() if v.estimate]
 
 
-def _mash(name) -> sources.VehicleData:
-    return sources.VEHICLES[name]
+# Dimensions no source read for this project gives, estimated from typical test cars of
+# each class (overall length, width, wheelbase, front overhang, c.g. aft of the front axle,
+# track; m): the EN 1317 cars after the small, lower-medium and large family cars that test
+# houses use for TB11, TB2x/TB31 and TB32; NCHRP 350's after the Geo Metro (820C) and the
+# Chevrolet C2500 (2000P) its text names as typical.
+_TYPICAL = {
+    "car 900": (3.6, 1.6, 2.4, 0.65, 0.90, 1.35),
+    "car 1300": (4.0, 1.7, 2.55, 0.8, 1.10, 1.40),
+    "car 1500": (4.6, 1.75, 2.7, 0.9, 1.24, 1.50),
+    "820C": (3.75, 1.6, 2.30, 0.75, 0.85, 1.35),
+    "2000P": (5.35, 1.95, 3.35, 0.80, 1.40, 1.65),
+    "1100C": (None, None, None, None, None, 1.47),
+    "2270P": (None, None, None, None, None, 1.70),
+}
+_FIELDS = ("overall_length_m", "overall_width_m", "wheelbase_m", "front_overhang_m",
+           "cg_behind_front_axle_m", "track_width_m")  # fmt: skip
 
 
-def _vehicle(name, yaw_inertia: Value, track: Value, crush: tuple[Value, Value]) -> Preset:
-    d = _mash(name)
-    table = f"MASH 2016 Table 4-1 via barrierjax.system.sources.VEHICLES[{name!r}]"
-    front_to_cg = d.front_overhang_m + d.cg_behind_front_axle_m
+def _dimension(d: sources.VehicleData, field: str, table: str) -> Value:
+    given = getattr(d, field)
+    if given is not None:
+        unconfirmed = field in d.source.unconfirmed
+        return Value(given, table + (" (unconfirmed in the corpus)" if unconfirmed else ""))
+    typical = _TYPICAL[d.name][_FIELDS.index(field)]
+    return Value(typical, f"estimate: a typical {d.name} test vehicle ({table} gives none)", True)
+
+
+def _vehicle(name, yaw_inertia: Value, crush: tuple[Value, Value]) -> Preset:
+    d = sources.VEHICLES[name]
+    table = f"{d.source.document} {d.source.clause} via barrierjax.system.sources.VEHICLES"
+    length, width, wheelbase, overhang, cg_aft, track = (
+        _dimension(d, field, table) for field in _FIELDS
+    )
     fields = {
         "mass": Value(d.mass_kg, table),
         "yaw_inertia": yaw_inertia,
-        "length": Value(d.overall_length_m, table + " (length unconfirmed in the corpus)"),
-        "width": Value(d.overall_width_m, table + " (width unconfirmed in the corpus)"),
-        "front_to_cg": Value(
-            front_to_cg,
-            table + ": front overhang + c.g. aft of the front "
-            "axle (both unconfirmed in the corpus)",
-        ),
-        "cg_to_front_axle": Value(d.cg_behind_front_axle_m, table + " (unconfirmed)"),
-        "wheelbase": Value(d.wheelbase_m, table),
+        "length": length,
+        "width": width,
+        "front_to_cg": Value(overhang.value + cg_aft.value, "front overhang + c.g. aft of the "
+                             "front axle", overhang.estimate or cg_aft.estimate),
+        "cg_to_front_axle": cg_aft,
+        "wheelbase": wheelbase,
         "track": track,
         "crush_stiffness": crush[0],
         "crush_strength": crush[1],
@@ -65,8 +87,8 @@ def _vehicle(name, yaw_inertia: Value, track: Value, crush: tuple[Value, Value])
             "surface with the wheels free, below the ~0.7-0.8 peak",
             True,
         ),
-    }
-    return Preset(name, f"MASH {name}", fields)
+    }  # fmt: skip
+    return Preset(name, f"{d.standard.upper()} {name}", fields)
 
 
 # The 2270P's yaw inertia: NCAC measured the pitch inertia of the 2007 Silverado quad cab
@@ -75,30 +97,39 @@ def _vehicle(name, yaw_inertia: Value, track: Value, crush: tuple[Value, Value])
 _PICKUP_YAW = Value(6158.0 * 2270.0 / 2337.0, "estimate: the 2007 Silverado's measured pitch "
                     "inertia (NCAC 2007-T-006 Table 2), scaled to 2270 kg, as its yaw inertia",
                     True)  # fmt: skip
-# The 1100C's: the 2270P's scaled by M L^2 (169 / 237 in long): 1480 kg m^2.
-_CAR_YAW = Value(_PICKUP_YAW.value * (1100 / 2270) * (169 / 237) ** 2, "estimate: the "
-                 "2270P's, scaled by mass times length squared", True)  # fmt: skip
+_PICKUP_LENGTH = sources.VEHICLES["2270P"].overall_length_m
+
+
+def _scaled_yaw(name) -> Value:
+    """The 2270P's yaw inertia scaled by mass times length squared."""
+    d = sources.VEHICLES[name]
+    length = d.overall_length_m or _TYPICAL[name][0]
+    value = _PICKUP_YAW.value * (d.mass_kg / 2270.0) * (length / _PICKUP_LENGTH) ** 2
+    return Value(value, "estimate: the 2270P's, scaled by mass times length squared", True)
+
+
 # Crush: the default scene's mean frontal crush force of a 2270P, 450 kN (a 56 km/h
 # rigid-wall test with about 0.6 m of crush: barrierjax/default_scene.toml), over its
-# 1.98 m width: 227 kN per metre of periphery; elastic up to 50 mm of crush. The 1100C's
-# in proportion to its mass.
+# 1.98 m width: 227 kN per metre of periphery; elastic up to 50 mm of crush. The other
+# vehicles' in proportion to their masses.
 _PICKUP_CRUSH = (
     Value(227e3 / 0.05, "estimate: the crush strength reached at 50 mm of crush", True),
     Value(227e3, "estimate: the default scene's 2270P crush force, 450 kN, over the width", True),
 )
-_CAR_CRUSH = tuple(Value(v.value * 1100 / 2270, v.source + ", scaled by mass", True)
-                   for v in _PICKUP_CRUSH)  # fmt: skip
+
+
+def _scaled_crush(name) -> tuple[Value, Value]:
+    share = sources.VEHICLES[name].mass_kg / 2270.0
+    return tuple(Value(v.value * share, v.source + ", scaled by mass", True)
+                 for v in _PICKUP_CRUSH)  # fmt: skip
+
 
 VEHICLES = {
-    "2270P": _vehicle(
-        "2270P",
-        _PICKUP_YAW,
-        Value(1.70, "estimate: a full-size pickup's track (MASH lists none)", True),
-        _PICKUP_CRUSH,
-    ),
-    "1100C": _vehicle(
-        "1100C", _CAR_YAW, Value(1.47, "estimate: a small sedan's track", True), _CAR_CRUSH
-    ),
+    "2270P": _vehicle("2270P", _PICKUP_YAW, _PICKUP_CRUSH),
+    **{
+        name: _vehicle(name, _scaled_yaw(name), _scaled_crush(name))
+        for name in ("1100C", "2000P", "820C", "car 900", "car 1300", "car 1500")
+    },
 }
 
 # 12-gauge W-beam (AASHTO M180 Class A): 2.67 mm, yield 345 MPa (confirmed, sources.py).
