@@ -86,3 +86,18 @@ def test_a_rigid_wall_scene_redirects_the_pickup(capsys, tmp_path):
     data = json.loads(out)
     assert data["contained"] and data["dynamic_deflection"] == 0.0
     assert data["barrier"] == "rigid wall" and data["failed_posts"] == 0
+
+
+@pytest.mark.parametrize(
+    "extra, vehicle, mass, kmh, angle",
+    [({"test": "TB11"}, "car 900", 900.0, 100, 20), ({"test": "TB32"}, "car 1500", 1500.0, 110, 20),
+     ({"test": "MASH 3-11", "vehicle": {"preset": "2000P"}}, "2000P", 2000.0, 100, 25)],
+)  # fmt: skip
+def test_en_1317_tests_and_nchrp_350_presets_bring_their_vehicles(extra, vehicle, mass, kmh, angle):
+    from barrierjax.system.scene import parse_system_scene
+
+    data = {"barrier": {"preset": "MGS", "length": "53.34 m"}, "impact": {"point": "20 m"}}
+    scene = parse_system_scene(data | extra)
+    assert scene.vehicle_name == vehicle and float(scene.vehicle.mass) == mass
+    assert scene.speed == pytest.approx(kmh / 3.6) and scene.angle_deg == angle
+    assert presets.VEHICLES[vehicle].estimates()  # the dimensions no source gives, flagged
