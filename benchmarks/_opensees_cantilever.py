@@ -66,7 +66,7 @@ class OpenSeesRun(NamedTuple):
     parameters: dict
 
 
-def _ops():
+def import_opensees():
     try:
         import openseespy.opensees as ops
     except Exception as error:  # ImportError, or RuntimeError on a missing BLAS
@@ -134,7 +134,7 @@ def run_example_1(
     algorithms tried, in turn, on a step where Newton fails (Newton again on the next
     step; `parameters["retried_steps"]` counts them); `overrides`: any of `EXAMPLE_1`'s
     entries (e.g. E=30e9 for a stiffer beam)."""
-    ops = _ops()
+    ops = import_opensees()
     unknown = set(overrides) - set(EXAMPLE_1)
     if unknown:
         raise ValueError(f"unknown Example 1 data: {sorted(unknown)}")

@@ -125,7 +125,7 @@ def converged_run(model, scheme, dt, t_end, start=0) -> dict:
 
 def opensees_available():
     try:
-        opensees._ops()
+        opensees.import_opensees()
     except ImportError as error:
         return f"OpenSees skipped: {error}"
     return None

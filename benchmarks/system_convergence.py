@@ -3,8 +3,8 @@
     python benchmarks/system_convergence.py [--quick] [--out DIR]
 
 The scenes of `examples/mash_3_11.toml` and `examples/mash_3_10.toml` (1.0 s each) with 2,
-4 (the scenes' own) and 8 elements between posts at the stable step, and with 4 elements
-at a half and a quarter of it: the crash-test numbers and the energy audit's largest
+4, 8 (the scenes' own), 16 and 32 elements between posts at the stable step, and with 8
+elements at a half and a quarter of it: the crash-test numbers and the energy audit's largest
 remainder of each, and the wall time of each run after compilation. Writes
 `system_convergence.json` to `--out`.
 """
@@ -49,8 +49,8 @@ def run(path, elements_per_span, step_fraction):
 
 def main():
     args = argument_parser(__doc__).parse_args()
-    cases = [(2, 1.0), (4, 1.0)] if args.quick else [(2, 1.0), (4, 1.0), (8, 1.0), (4, 0.5),
-                                                      (4, 0.25)]  # fmt: skip
+    cases = [(2, 1.0), (4, 1.0)] if args.quick else [
+        (2, 1.0), (4, 1.0), (8, 1.0), (16, 1.0), (32, 1.0), (8, 0.5), (8, 0.25)]  # fmt: skip
     data = {}
     for name in ("mash_3_11", "mash_3_10"):
         rows = [run(EXAMPLES / f"{name}.toml", n, f) for n, f in cases]

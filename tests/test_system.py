@@ -30,7 +30,7 @@ def _rail(strength=45e3, failure=0.4, spacing=1.905):
     section = system.rail_section(1.29e-3, 1.4e-6, RateIndependentPlasticity(200e9, 345e6))
     posts = system.post_springs(1.5e6, strength, failure, 1e6, 30e3)
     return system.guardrail(16 * spacing, spacing, section=section, density=7850.0, posts=posts,
-                            anchor_stiffness=1e7)  # fmt: skip
+                            anchor_stiffness=1e7, elements_per_span=4)  # fmt: skip
 
 
 def test_head_on_crush_against_a_wall_is_the_elastic_plastic_spring_in_closed_form():

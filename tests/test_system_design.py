@@ -22,7 +22,7 @@ def _rail(spacing=1.905, area=1.29e-3, second_moment=1.4e-6, strength=45e3):
     section = system.rail_section(area, second_moment, RateIndependentPlasticity(200e9, 345e6))
     posts = system.post_springs(1.5e6, strength, 10.0, 1e6, 30e3)
     return system.guardrail(16 * spacing, spacing, section=section, density=7850.0, posts=posts,
-                            anchor_stiffness=1e7)  # fmt: skip
+                            anchor_stiffness=1e7, elements_per_span=4)  # fmt: skip
 
 
 def test_a_redesign_is_the_system_built_afresh():

@@ -26,7 +26,7 @@ def test_the_mash_3_11_scene_reads_the_test_and_the_presets():
     assert scene.test == "MASH 3-11"
     assert scene.speed == pytest.approx(100 / 3.6) and scene.angle_deg == 25.0
     assert float(scene.vehicle.mass) == 2270.0
-    assert scene.barrier.post_nodes[1] - scene.barrier.post_nodes[0] == 4
+    assert scene.barrier.post_nodes[1] - scene.barrier.post_nodes[0] == 8
     # Every preset value says where it comes from, and the estimates say so.
     for preset in (*presets.VEHICLES.values(), presets.MGS):
         assert all(v.source for v in preset.fields.values())
@@ -101,3 +101,19 @@ def test_en_1317_tests_and_nchrp_350_presets_bring_their_vehicles(extra, vehicle
     assert scene.vehicle_name == vehicle and float(scene.vehicle.mass) == mass
     assert scene.speed == pytest.approx(kmh / 3.6) and scene.angle_deg == angle
     assert presets.VEHICLES[vehicle].estimates()  # the dimensions no source gives, flagged
+
+
+@pytest.mark.parametrize("name, spans", [("MGS", 28), ("G4(1S)", 28), ("thrie-beam", 28),
+                                         ("box beam", 30)])  # fmt: skip
+def test_every_guardrail_preset_builds_its_rail_and_flags_its_estimates(name, spans):
+    from barrierjax.system.scene import parse_system_scene
+
+    spacing = presets.BARRIERS[name].values()["post_spacing"]
+    data = {"test": "MASH 3-11", "barrier": {"preset": name, "length": f"{spans * spacing} m"},
+            "impact": {"point": "20 m"}}  # fmt: skip
+    scene = parse_system_scene(data)
+    assert len(scene.barrier.post_nodes) == spans + 1
+    assert float(scene.barrier.rail.section.A) == pytest.approx(
+        presets.BARRIERS[name].values()["rail_area"]
+    )
+    assert presets.BARRIERS[name].estimates()

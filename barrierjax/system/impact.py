@@ -40,6 +40,8 @@ class SystemHistory(eqx.Module):
     yaw_rate: jnp.ndarray  # (n,)
     acceleration: jnp.ndarray  # (n, 2) the c.g.'s in the vehicle's axes (x forward, y left),
     # the mean over the interval that starts at the sample
+    contact_on_rail: jnp.ndarray  # (n, n_nodes, 2) the contact's force on each rail node (x,
+    # y; the mean over the interval that starts at the sample: its impulse kept)
     rail_deflection: jnp.ndarray  # (n, n_nodes) lateral displacement (towards the field side)
     rail_tension: jnp.ndarray  # (n, n_elements) each element's axial force (N; tension > 0)
     post_force: jnp.ndarray  # (n, n_posts) lateral
@@ -201,10 +203,22 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
         contact_moment = jnp.sum(r[:, 0] * on_points[:, 1] - r[:, 1] * on_points[:, 0])
         acting = _Loads(f_int, f_post, f_anchor, on_rail, jnp.sum(on_points, 0),
                         contact_moment, tyre_force, tyre_moment)  # fmt: skip
-        return acting, sections, crush, plastic, failed, friction_power, on_points, tension
+        return (
+            acting,
+            sections,
+            crush,
+            plastic,
+            failed,
+            friction_power,
+            on_points,
+            on_nodes,
+            tension,
+        )
 
     def step(s: _State, _):
-        now, sections, crush, plastic, failed, friction_power, on_points, tension = loads(s)
+        now, sections, crush, plastic, failed, friction_power, on_points, on_nodes, tension = loads(
+            s
+        )
         a_rail = (now.contact - now.internal - now.posts - now.anchors) / mass
         force = now.contact_force + now.tyre_force
         moment = now.contact_moment + now.tyre_moment
@@ -232,7 +246,7 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
             kinetic = kinetic + 0.5 * jnp.sum(mass * v_mid**2)
         error = (kinetic0 - kinetic - jnp.sum(works[:5])) / kinetic0
         acceleration = rotation(s.psi).T @ (force / vehicle.mass)
-        out = (s.X, s.psi, V_mid, w_mid, acceleration, s.u[1::3], tension,
+        out = (s.X, s.psi, V_mid, w_mid, acceleration, on_nodes, s.u[1::3], tension,
                _lateral(now.posts, rail),
                -jnp.sum(on_points[:, 1]), error, kinetic)  # fmt: skip
         u_next = s.u + dt * v if rail is not None else s.u
@@ -245,7 +259,7 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
         first = jax.tree.map(lambda x: x[0], outs)
         # The acceleration as its mean over the interval (a box filter: no aliasing of the
         # contact's chatter into the occupant-risk metrics).
-        return s, (*first[:4], jnp.mean(outs[4], 0), *first[5:])
+        return s, (*first[:4], jnp.mean(outs[4], 0), jnp.mean(outs[5], 0), *first[6:])
 
     cg, psi = _initial_pose(vehicle, impact_point, angle)
     velocity = speed * jnp.stack([jnp.cos(angle), jnp.sin(angle)])
@@ -255,9 +269,9 @@ def _integrate(vehicle, barrier, speed, angle, impact_point, friction, *, dt, n_
                    jnp.zeros(body_points.shape[0]), jnp.zeros((n_posts, 2)),
                    jnp.zeros(n_posts, bool), jnp.zeros(6), nothing)  # fmt: skip
     final, outs = jax.lax.scan(saved, start, None, length=n_saved)
-    X, psi, V, w, acc, deflection, tension, post_f, contact_f, error, kinetic = outs
+    X, psi, V, w, acc, on_rail, deflection, tension, post_f, contact_f, error, kinetic = outs
     times = jnp.arange(n_saved, dtype=kinetic0.dtype) * (save_every * dt)
-    history = SystemHistory(times, X, psi, V, w, acc, deflection, tension, post_f, contact_f,
+    history = SystemHistory(times, X, psi, V, w, acc, on_rail, deflection, tension, post_f, contact_f,
                             error)  # fmt: skip
     names = ("rail", "posts", "anchors", "contact", "tyres", "contact_friction")
     energies = {name: final.works[k] for k, name in enumerate(names)} | {"kinetic": kinetic[-1]}

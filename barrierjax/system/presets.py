@@ -164,6 +164,63 @@ MGS = Preset(
     },
 )  # fmt: skip
 
-BARRIERS = {"MGS": MGS, "rigid wall": Preset("rigid wall", "an immovable wall, y = 0")}
+# G4(1S): the same rail on W6x9 posts at the same spacing, 6x8 in blockouts, the rail's top
+# at 27.75 in with splices at the posts (sources.BARRIERS['g4_1s']). A planar model sees
+# none of what sets it apart from the MGS (the rail's height, the splices' place, the
+# blockouts' depth, the wheels snagging on posts): its preset is the MGS's, posts included.
+G4_1S = Preset(
+    "G4(1S)",
+    "modified G4(1S) strong-post W-beam: 12-gauge W-beam at 27.75 in, W6x9 posts at 6 ft "
+    "3 in, 6x8 in blockouts (MwRSF 2214WB-1); in plan the MGS's values",
+    {key: Value(v.value, v.source + " (as the MGS: in plan the two differ by nothing the "
+                "model holds)", v.estimate) for key, v in MGS.fields.items()},
+)  # fmt: skip
+
+
+def _scaled_rail(developed_width_in, note):
+    """A 12-gauge corrugated rail's area and second moment for lateral bending from the
+    W-beam's, in proportion to its developed (blank) width (the same corrugation depth)."""
+    ratio = developed_width_in / 19.0  # the W-beam's: 1.99 in^2 / 0.105 in
+    return {
+        "rail_area": Value(1.99 * _IN**2 * ratio, f"estimate: {note}", True),
+        "rail_second_moment": Value(2.31 * _IN**4 * ratio, f"estimate: {note}", True),
+    }
+
+
+THRIE_BEAM = Preset(
+    "thrie-beam",
+    "12-gauge thrie beam on W6x9 strong posts at 6 ft 3 in (no source read gives its "
+    "section, posts or anchorage: sources.BARRIERS['thrie_beam'])",
+    MGS.fields | _scaled_rail(29.0, "the W-beam's, scaled by the thrie beam's developed width "
+                              "(about 29 in against 19 in; recalled, not read)"),
+)  # fmt: skip
+
+# Box beam (G3): a 6x6x3/16 in steel tube on S3x5.7 weak posts at 6 ft; the tube's section
+# (A 3.98 in^2, I 22.3 in^4: an HSS 6x6x3/16's, recalled), the posts' (weak posts yield and
+# release the rail early) all estimates: no source read gives them (sources.py).
+BOX_BEAM = Preset(
+    "box beam",
+    "G3 box beam: a 6x6x3/16 in steel tube on S3x5.7 weak posts at 6 ft (every value an "
+    "estimate: sources.BARRIERS['box_beam'])",
+    MGS.fields | {
+        "post_spacing": Value(6 * 12 * _IN, "estimate: G3's 6 ft (recalled, not read)", True),
+        "rail_area": Value(3.98 * _IN**2, "estimate: HSS 6x6x3/16, 3.98 in^2 (recalled)", True),
+        "rail_second_moment": Value(22.3 * _IN**4, "estimate: HSS 6x6x3/16, 22.3 in^4 "
+                                    "(recalled)", True),
+        "yield_stress": Value(46e3 * 6894.757, "estimate: ASTM A500 grade B tube, 46 ksi "
+                              "(recalled)", True),
+        "post_stiffness": Value(0.5e6, "estimate: an S3x5.7 weak post in soil", True),
+        "post_strength": Value(10e3, "estimate: an S3x5.7 weak post bending at the ground", True),
+        "post_failure": Value(0.15, "estimate: the rail's release from a weak post", True),
+    },
+)  # fmt: skip
+
+BARRIERS = {
+    "MGS": MGS,
+    "G4(1S)": G4_1S,
+    "thrie-beam": THRIE_BEAM,
+    "box beam": BOX_BEAM,
+    "rigid wall": Preset("rigid wall", "an immovable wall, y = 0"),
+}
 
 RAIL_FRICTION = Value(0.3, "estimate: vehicle sheet metal sliding on a galvanised W-beam", True)

@@ -214,7 +214,7 @@ def _barrier(name, values, table):
     return guardrail(values["length"], values["post_spacing"], section=section,
                      density=values["density"], posts=posts,
                      anchor_stiffness=values["anchor_stiffness"],
-                     elements_per_span=int(table.get("elements_per_span", 4)))  # fmt: skip
+                     elements_per_span=int(table.get("elements_per_span", 8)))  # fmt: skip
 
 
 def load_system_scene(path) -> SystemScene:
