@@ -108,10 +108,7 @@ def test_history_energy_at_every_saved_time():
     np.testing.assert_allclose(work, lost, atol=1e-8 * 0.5 * mu * v**2)
     np.testing.assert_allclose(h.axial_force, 2.0 * eta0 * h.barrier_displacement, rtol=1e-12)
     assert np.all(np.diff(h.hinge_position) >= -1e-8)  # (to the dense output's error near rest)
-    assert (
-        h.barrier_displacement[-1] == r.barrier_displacement
-        and h.hinge_position[-1] == r.hinge_position
-    )
+    assert h.barrier_displacement[-1] == r.barrier_displacement and h.hinge_position[-1] == r.hinge_position
 
 
 def test_vmap_equals_loop():

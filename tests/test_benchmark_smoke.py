@@ -85,9 +85,7 @@ def test_oblique_impact_benchmark_quick(tmp_path):
 @pytest.mark.slow
 def test_axial_force_benchmark_quick(tmp_path):
     out = tmp_path / "results"
-    data = run_quick(
-        "axial_force", out, 300, ("example", "error_vs_time", "throughput", "string", "gradient")
-    )
+    data = run_quick("axial_force", out, 300, ("example", "error_vs_time", "throughput", "string", "gradient"))
     ours, *report = data["example"]
     # The report's scheme converges towards the model as its step falls (a correctness check
     # of the benchmark's own transcription of the scheme, not a speed check).
@@ -100,9 +98,7 @@ def test_axial_force_benchmark_quick(tmp_path):
 
 
 def test_materials_benchmark_quick(tmp_path):
-    data = run_quick(
-        "materials", tmp_path / "results", 300, ("error_vs_time", "throughput", "summary")
-    )
+    data = run_quick("materials", tmp_path / "results", 300, ("error_vs_time", "throughput", "summary"))
     methods = {row["method"] for row in data["error_vs_time"]}
     assert methods == {"implicit", "report", "explicit", "diffrax", "scipy Radau"}
     # The closed-form references make every stable error small at the finest setting; the

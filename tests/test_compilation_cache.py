@@ -47,9 +47,7 @@ def test_a_second_process_loads_what_the_first_compiled(tmp_path):
     assert first.returncode == 0, first.stderr
     entries = sorted(p.name for p in Path(tmp_path / "cache").iterdir())
     assert entries, "nothing was written to the cache"
-    second = subprocess.run(
-        [sys.executable, "-c", program], env=env, capture_output=True, text=True
-    )
+    second = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True)
     assert second.returncode == 0, second.stderr
     assert second.stdout == first.stdout
     assert sorted(p.name for p in Path(tmp_path / "cache").iterdir()) == entries

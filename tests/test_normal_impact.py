@@ -51,18 +51,9 @@ def reference(mu, phi, v0):
     options = dict(weight="alg", epsabs=0.0, epsrel=1e-12, limit=200)
     dt = quad(smooth_rate, s_star, alpha, wvar=(0.0, a - 1.0), **options)[0]
     dw = quad(
-        lambda s: smooth_rate(s) * smooth_velocity(s),
-        s_star,
-        alpha,
-        wvar=(0.0, 2 * a - 1.0),
-        **options,
+        lambda s: smooth_rate(s) * smooth_velocity(s), s_star, alpha, wvar=(0.0, 2 * a - 1.0), **options
     )[0]
-    return dict(
-        duration=t_star + dt,
-        barrier_displacement=w_star + dw,
-        damage=0.5 * v0 * t_star,
-        hinge_position=alpha,
-    )
+    return dict(duration=t_star + dt, barrier_displacement=w_star + dw, damage=0.5 * v0 * t_star, hinge_position=alpha)
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -85,10 +76,8 @@ def test_accelerative_phase_closed_form():
     assert rel(r.v_star, mu * v0 * (phi - s) / (phi * s + mu * (phi - s))) < 1e-14
     assert rel(r.damage, 0.5 * v0 * t_star) < 1e-14
     # The report's printed D/V0^2 lacks the factor 1/2 (docs/errata.md, 3.2 damage).
-    printed = (
-        mu
-        * (math.sqrt(phi**2 + 3) - phi)
-        / (phi * math.sqrt(phi**2 + 3) - phi**2 + mu * (2 * phi - math.sqrt(phi**2 + 3)))
+    printed = mu * (math.sqrt(phi**2 + 3) - phi) / (
+        phi * math.sqrt(phi**2 + 3) - phi**2 + mu * (2 * phi - math.sqrt(phi**2 + 3))
     )
     assert rel(r.damage / v0**2, 0.5 * printed) < 1e-14
 
@@ -144,11 +133,7 @@ def energy_residual(result, mu, phi, v0):
     h = result.history
     crush_work = phi * h.crush
     total = (
-        h.vehicle_kinetic_energy
-        + crush_work
-        + h.backing_work
-        + h.hinge_work
-        + h.beam_kinetic_energy
+        h.vehicle_kinetic_energy + crush_work + h.backing_work + h.hinge_work + h.beam_kinetic_energy
     )
     return np.max(np.abs(np.asarray(total) - 0.5 * mu * v0**2)) / (0.5 * mu * v0**2)
 
@@ -186,12 +171,8 @@ def test_vmap_equals_loop(method):
     for i, case in enumerate(CASES):
         single = normal_impact(*case, method=method)
         for field in ("damage", "barrier_displacement", "duration", "hinge_position", "hinge_work"):
-            assert float(getattr(batched, field)[i]) == pytest.approx(
-                float(getattr(single, field)), rel=1e-13
-            )
-            assert float(getattr(direct, field)[i]) == pytest.approx(
-                float(getattr(single, field)), rel=1e-13
-            )
+            assert float(getattr(batched, field)[i]) == pytest.approx(float(getattr(single, field)), rel=1e-13)
+            assert float(getattr(direct, field)[i]) == pytest.approx(float(getattr(single, field)), rel=1e-13)
 
 
 @pytest.mark.parametrize("method", METHODS)

@@ -70,14 +70,7 @@ def test_string_cases_vmap_equals_loop_and_limits():
     batched = _string(mu, phi, v, eta0)
     for i, case in enumerate(STRING_CASES):
         single = _string(*case)
-        for field in (
-            "barrier_displacement",
-            "damage",
-            "duration",
-            "t_string",
-            "string_work",
-            "hinge_position",
-        ):
+        for field in ("barrier_displacement", "damage", "duration", "t_string", "string_work", "hinge_position"):
             np.testing.assert_allclose(
                 getattr(batched, field)[i], getattr(single, field), rtol=1e-12, err_msg=field
             )
@@ -85,10 +78,7 @@ def test_string_cases_vmap_equals_loop_and_limits():
         jax.tree.map(lambda leaf, i=i: leaf[i], batched) for i in range(3)
     )
     # N/N0 = 2 eta0 W0 reaches 1 where the string begins (3.4.43).
-    for r, case in (
-        (string_after_crushing, STRING_CASES[0]),
-        (string_while_crushing, STRING_CASES[1]),
-    ):
+    for r, case in ((string_after_crushing, STRING_CASES[0]), (string_while_crushing, STRING_CASES[1])):
         assert np.isfinite(r.t_string) and r.duration > r.t_string and r.string_work > 0
         assert r.barrier_displacement > 1.0 / (2.0 * case[3])
     assert np.isinf(no_string.t_string) and no_string.string_work == 0.0

@@ -28,9 +28,7 @@ def test_groups_match_hand_calculation():
     assert float(g.scales.force) == pytest.approx(force, rel=1e-14)
     assert float(g.scales.time) == pytest.approx(time, rel=1e-14)
     # docs/errata.md, 3.3.14: velocity scale 2 M0^(1/4) q0^(1/4) / m^(1/2), L/t0^2 = 2 q0/m.
-    assert float(g.scales.velocity) == pytest.approx(
-        2 * moment**0.25 * q0**0.25 / math.sqrt(m), rel=1e-14
-    )
+    assert float(g.scales.velocity) == pytest.approx(2 * moment**0.25 * q0**0.25 / math.sqrt(m), rel=1e-14)
     assert float(g.scales.acceleration) == pytest.approx(length / time**2, rel=1e-14)
     assert float(g.mass_ratio) == pytest.approx(mass / (m * length), rel=1e-14)
     assert float(g.force_ratio) == pytest.approx(crush / force, rel=1e-14)
@@ -46,9 +44,7 @@ def test_angle_splits_the_speed():
 
 
 def test_axial_ratio():
-    s = bj.Scene(
-        bj.Barrier(1.0, 1.0, 4.0, axial_capacity=8.0), bj.Vehicle(1.0, 1.0), bj.Impact(1.0)
-    )
+    s = bj.Scene(bj.Barrier(1.0, 1.0, 4.0, axial_capacity=8.0), bj.Vehicle(1.0, 1.0), bj.Impact(1.0))
     assert float(bj.dimensionless(s).axial_ratio) == pytest.approx(8.0 / (4 * math.sqrt(4.0)))
 
 
@@ -66,10 +62,7 @@ def test_axial_ratio():
         (lambda: bj.Impact(1.0, angle_deg=90.5), "Impact.angle_deg"),
         (lambda: bj.Impact(1.0, friction=-0.1), "Impact.friction"),
         (lambda: bj.Impact(np.array([1.0, -1.0])), "Impact.speed"),
-        (
-            lambda: bj.Scene(bj.Vehicle(1.0, 1.0), bj.Vehicle(1.0, 1.0), bj.Impact(1.0)),
-            "Scene.barrier",
-        ),
+        (lambda: bj.Scene(bj.Vehicle(1.0, 1.0), bj.Vehicle(1.0, 1.0), bj.Impact(1.0)), "Scene.barrier"),
     ],
 )
 def test_bad_input_names_the_field(build, field):
@@ -82,9 +75,7 @@ def test_scene_is_a_pytree_for_vmap():
     batch = scene(speed=speeds)
     groups = jax.vmap(bj.dimensionless)(bj.broadcast_scene(batch))
     for i, v in enumerate(speeds):
-        assert float(groups.normal_speed[i]) == pytest.approx(
-            float(bj.dimensionless(scene(speed=float(v))).normal_speed)
-        )
+        assert float(groups.normal_speed[i]) == pytest.approx(float(bj.dimensionless(scene(speed=float(v))).normal_speed))
 
 
 def test_top_level_names_a_newcomer_reaches_for():

@@ -162,11 +162,8 @@ def _error(data) -> SceneFileError:
 @pytest.mark.parametrize(
     "changes, prefix, words",
     [
-        (
-            {"barrier.plastic_moment": "100 kg"},
-            "[barrier] plastic_moment:",
-            "expected a moment (force*length), got '100 kg'",
-        ),
+        ({"barrier.plastic_moment": "100 kg"}, "[barrier] plastic_moment:",
+         "expected a moment (force*length), got '100 kg'"),
         ({"barrier.plastic_moment": 100}, "[barrier] plastic_moment:", "bare number"),
         ({"barrier.plastic_moment": 1e5}, "[barrier] plastic_moment:", "with units"),
         ({"barrier.plastic_moment": "100"}, "[barrier] plastic_moment:", "bare number"),

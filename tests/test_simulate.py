@@ -58,9 +58,7 @@ def test_histories_and_deflected_shape():
     h = r.history
     assert h.deflected_shape.shape == (200, N_SHAPE)
     # Under the impact point the shape is the displacement history.
-    np.testing.assert_allclose(
-        h.deflected_shape[:, 0], h.barrier_displacement, rtol=1e-12, atol=1e-15
-    )
+    np.testing.assert_allclose(h.deflected_shape[:, 0], h.barrier_displacement, rtol=1e-12, atol=1e-15)
     # Nothing moves beyond the hinge; the final hinge is the hinge extent.
     beyond = np.asarray(h.x)[None, :] > np.asarray(h.hinge_position)[:, None] * (1 + 1e-9)
     assert np.all(np.asarray(h.deflected_shape)[beyond] == 0.0)
@@ -75,14 +73,10 @@ def test_histories_and_deflected_shape():
 
 def test_vmap_over_scene_leaves_equals_loop():
     speeds = jnp.array([3.0, 8.0, 15.0, 25.0])
-    batch = jax.vmap(lambda s: bj.simulate(s, n_history=0))(
-        bj.broadcast_scene(si_scene(speed=speeds))
-    )
+    batch = jax.vmap(lambda s: bj.simulate(s, n_history=0))(bj.broadcast_scene(si_scene(speed=speeds)))
     for i, v in enumerate(speeds):
         single = bj.simulate(si_scene(speed=float(v)), n_history=0)
-        assert float(batch.max_deflection[i]) == pytest.approx(
-            float(single.max_deflection), rel=1e-13
-        )
+        assert float(batch.max_deflection[i]) == pytest.approx(float(single.max_deflection), rel=1e-13)
         assert float(batch.damage[i]) == pytest.approx(float(single.damage), rel=1e-13)
 
 
@@ -93,9 +87,7 @@ def test_gradient_with_respect_to_every_scene_leaf(method):
     x = jnp.stack(leaves)
 
     def outputs(x):
-        r = bj.simulate(
-            jax.tree.unflatten(treedef, list(x)), method=method, rtol=1e-11, n_history=0
-        )
+        r = bj.simulate(jax.tree.unflatten(treedef, list(x)), method=method, rtol=1e-11, n_history=0)
         return jnp.stack([r.damage, r.max_deflection, r.duration])
 
     jacobian = jax.jacrev(outputs)(x)
@@ -115,9 +107,7 @@ def test_axial_capacity_runs_the_axial_model():
     model = bj.hinge.axial_impact(
         g.mass_ratio, g.force_ratio, g.normal_speed, axial_ratio=g.axial_ratio
     )
-    assert float(result.max_deflection) == pytest.approx(
-        float(model.barrier_displacement * g.scales.length)
-    )
+    assert float(result.max_deflection) == pytest.approx(float(model.barrier_displacement * g.scales.length))
     plain = bj.simulate(si_scene(), n_history=0)
     assert float(result.max_deflection) < float(plain.max_deflection)
     assert np.isinf(float(result.model.t_string))
@@ -139,9 +129,7 @@ def test_axial_scene_that_reaches_the_plastic_string():
     # To the string's discretisation error (128 cells).
     assert float(total) == pytest.approx(float(result.kinetic_energy), rel=1e-5)
     data = result_dict(scene, result)
-    assert data["string_start_s"] == pytest.approx(
-        float(result.model.t_string * result.groups.scales.time)
-    )
+    assert data["string_start_s"] == pytest.approx(float(result.model.t_string * result.groups.scales.time))
     assert abs(data["energy_balance_error_J"]) < 1e-5 * data["kinetic_energy_J"]
     assert "plastic string from" in format_summary(data)
     # The deflected shape at rest is the string's: its centre is the final deflection, it
@@ -165,20 +153,14 @@ def test_oblique_scene_runs_the_oblique_model():
     scene = eqx.tree_at(lambda s: s.impact, si_scene(), bj.Impact(10.0, angle_deg=25.0))
     result = bj.simulate(scene, n_history=0, rtol=1e-6)
     g = bj.dimensionless(scene)
-    direct = oblique_impact(
-        g.mass_ratio, g.force_ratio, g.normal_speed, g.tangential_speed, rtol=1e-6
-    )
+    direct = oblique_impact(g.mass_ratio, g.force_ratio, g.normal_speed, g.tangential_speed, rtol=1e-6)
     assert float(result.damage) == pytest.approx(float(direct.damage * g.scales.length), rel=1e-12)
     assert float(result.exit_angle_deg) == pytest.approx(float(direct.exit_angle_deg), rel=1e-12)
     assert 0.0 < float(result.exit_speed) < 10.0
     # Where the vehicle's kinetic energy went, the exit kinetic energy included.
     spent = (
-        result.crush_work
-        + result.backing_work
-        + result.hinge_work
-        + result.friction_work
-        + result.slope_work
-        + 0.5 * scene.vehicle.mass * result.exit_speed**2
+        result.crush_work + result.backing_work + result.hinge_work + result.friction_work
+        + result.slope_work + 0.5 * scene.vehicle.mass * result.exit_speed**2
     )
     assert float(spent) == pytest.approx(float(result.kinetic_energy), rel=1e-6)
 
@@ -195,3 +177,4 @@ def test_traced_angle_dispatch():
     oblique = jax.jit(lambda a: run(a, oblique=True))
     assert float(oblique(90.0)) == pytest.approx(float(run(90.0)), rel=1e-7)
     assert float(oblique(30.0)) == pytest.approx(float(run(30.0)), rel=1e-9)
+

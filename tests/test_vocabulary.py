@@ -118,9 +118,7 @@ def test_simulate_and_the_cli_json_use_the_shared_names(kind):
         ), (kind, field)
     data = result_dict(scene, result, kind)
     for field, unit in RESULT_UNITS.items():
-        assert data[field + _SUFFIX[unit]] == pytest.approx(
-            float(getattr(result, field)), rel=1e-12
-        )
+        assert data[field + _SUFFIX[unit]] == pytest.approx(float(getattr(result, field)), rel=1e-12)
     assert abs(data["energy_balance_error_J"]) < 1e-4 * data["kinetic_energy_J"]
 
 

@@ -220,9 +220,7 @@ def _record(recorder: _Recorder, step, values, profile) -> _Recorder:
     full = recorder.count == size
 
     def halved(buffer):
-        return jnp.where(
-            full, jnp.concatenate([buffer[::2], jnp.zeros_like(buffer[size // 2 :])]), buffer
-        )
+        return jnp.where(full, jnp.concatenate([buffer[::2], jnp.zeros_like(buffer[size // 2:])]), buffer)
 
     samples, profiles = halved(recorder.samples), halved(recorder.profiles)
     stride = jnp.where(full, 2 * recorder.stride, recorder.stride)
@@ -265,9 +263,7 @@ def _resampled(final: _State, last, n_history: int):
     filled = index < recorder.count
     # The steps run past the last stop by up to one step; unfilled slots go beyond.
     recorded = jnp.minimum(recorder.samples[:, 0], duration)
-    times = jnp.append(
-        jnp.where(filled, recorded, duration + 1.0 + index.astype(duration.dtype)), duration
-    )
+    times = jnp.append(jnp.where(filled, recorded, duration + 1.0 + index.astype(duration.dtype)), duration)
     samples = jnp.concatenate([recorder.samples, values[None]])
     profiles = jnp.concatenate([recorder.profiles, profile[None]])
     at = jnp.linspace(0.0, 1.0, n_history) * duration
@@ -375,9 +371,7 @@ def plastic_string_stage(
         kicked = _kick(after, grid.dt, (after.step.astype(grid.dt.dtype) - 0.5) * grid.dt, grid)
         if record:
             sample = _sample(kicked, after, grid, stretched_at_start)
-            kicked = eqx.tree_at(
-                lambda s: s.recorder, kicked, _record(kicked.recorder, kicked.step, *sample)
-            )
+            kicked = eqx.tree_at(lambda s: s.recorder, kicked, _record(kicked.recorder, kicked.step, *sample))
         return kicked
 
     final = jax.lax.while_loop(moving, step, state)
