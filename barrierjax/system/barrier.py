@@ -5,9 +5,11 @@ The rail runs along x through y = 0 from x = 0 to `length`, posts every `post_sp
 (the first and last at the rail's ends), `elements_per_span` co-rotational elements of
 `barrierjax.beam` between posts, each with its layered section and uniaxial law, so that
 the report's rate laws (chapter 2) reach the system. The masses are lumped at the nodes
-(explicit time integration: `impact.py`), with a rotary inertia of m dx^2 / 12 per node
-(the translational mass's, spread over its element: it keeps the rotational modes below the
-axial ones and adds a negligible kinetic energy).
+(explicit time integration: `impact.py`), with a rotary inertia per node of m times the
+larger of dx^2 / 12 (the translational mass spread over its element) and 4 I / A: either
+keeps the rotational modes below the axial ones, so that the stable step stays the axial
+waves' (dx / c) on fine meshes, and adds a negligible kinetic energy (the rail's own is
+m I / A).
 
 A post is a pair of springs at its rail node, lateral (y) and longitudinal (x), each
 elastic-perfectly plastic; a post whose lateral displacement passes `failure` is gone (it
@@ -116,7 +118,7 @@ def guardrail(
         [(i, i + 1) for i in range(n_elements)],
         section,
         density,
-        point_inertia=node_mass * dx**2 / 12,
+        point_inertia=node_mass * jnp.maximum(dx**2 / 12, 4 * section.I / section.A),
         quadrature="lobatto3",
         shallow=False,
     )

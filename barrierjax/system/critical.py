@@ -18,6 +18,7 @@ class ImpactPointSweep(eqx.Module):
     points: jnp.ndarray  # (n,) m along the rail
     values: jnp.ndarray  # (n,) the criterion at each
     critical: jnp.ndarray  # the point where it is largest
+    numbers: dict  # every crash-test number of `assessment.summary` at each point, (n,)
     criterion: str = eqx.field(static=True)
 
 
@@ -49,5 +50,6 @@ def critical_impact_point(vehicle, barrier, points, *, speed, angle_deg, duratio
                              impact_point=point, duration=duration, **options)  # fmt: skip
 
     # The runs in one vmap; the occupant risk after it (its times must be concrete).
-    values = _criterion(summary(jax.jit(jax.vmap(one))(points)), criterion)
-    return ImpactPointSweep(points, values, points[jnp.argmax(values)], criterion)
+    numbers = summary(jax.jit(jax.vmap(one))(points))
+    values = _criterion(numbers, criterion)
+    return ImpactPointSweep(points, values, points[jnp.argmax(values)], numbers, criterion)

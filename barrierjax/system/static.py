@@ -52,9 +52,9 @@ def static_pushover(
     if int(increments) != increments or increments < 1:
         raise ValueError(f"increments must be a positive integer; got {increments!r}")
     dt = positive("time_per_increment", time_per_increment)
-    pattern, under_load = _point_load(g, float(x))
+    pattern, dofs, shape = _point_load(g, float(x))
     factors = jnp.arange(1, int(increments) + 1, dtype=force.dtype) / increments
-    result, converged = _pushover(g, force, pattern, under_load, factors, dt, rtol)
+    result, converged = _pushover(g, force, pattern, dofs, shape, factors, dt, rtol)
     failed = np.flatnonzero(~np.asarray(converged))
     if failed.size:
         load = float(force) * float(factors[failed[0]])
@@ -67,8 +67,8 @@ def static_pushover(
 
 
 def _point_load(g: Guardrail, x):
-    """The consistent nodal forces of a unit lateral load at x (3 n_nodes,), and the
-    function that reads the rail's lateral displacement there from its dofs."""
+    """The consistent nodal forces of a unit lateral load at x (3 n_nodes,), and the dofs
+    and shape functions that read the rail's lateral displacement there."""
     coords = np.asarray(g.rail.coords)[:, 0]
     dx = coords[1] - coords[0]
     element = min(int(x // dx), len(coords) - 2)
@@ -76,11 +76,11 @@ def _point_load(g: Guardrail, x):
     dofs = 3 * element + np.array([1, 2, 4, 5])
     shape, _ = hermite_shape(jnp.asarray(xi, g.rail.coords.dtype), jnp.asarray(dx))
     pattern = jnp.zeros(3 * len(coords), g.rail.coords.dtype).at[dofs].set(shape)
-    return pattern, lambda u: jnp.dot(shape, u[dofs])
+    return pattern, jnp.asarray(dofs), shape
 
 
 @eqx.filter_jit
-def _pushover(g: Guardrail, force, pattern, under_load, factors, dt, rtol):
+def _pushover(g: Guardrail, force, pattern, dofs, shape, factors, dt, rtol):
     stress, state = init_sections(g.rail)
     n_posts = len(g.post_nodes)
     solver = optx.Newton(rtol=rtol, atol=rtol)
@@ -100,7 +100,7 @@ def _pushover(g: Guardrail, force, pattern, under_load, factors, dt, rtol):
         out = (
             converged,
             factor * force,
-            under_load(u),
+            jnp.dot(shape, u[dofs]),
             u[1::3],
             f_post[3 * np.asarray(g.post_nodes) + 1],
         )
