@@ -25,6 +25,9 @@ from typing import NamedTuple
 import numpy as np
 from _opensees_cantilever import import_opensees
 
+POST_FIELDS = ("stiffness", "strength", "failure", "longitudinal_stiffness",
+               "longitudinal_strength")  # fmt: skip
+
 
 class OpenSeesGuardrailRun(NamedTuple):
     """`lateral`: every node's lateral displacement (m) every `record_every` steps, from
@@ -49,8 +52,7 @@ def _guardrail_data(g):
         "mass": np.asarray(g.node_mass),
         "inertia": np.asarray(g.rail.point_inertia),
         "posts": list(g.post_nodes),
-        "post": {k: float(getattr(g.posts, k)) for k in ("stiffness", "strength", "failure",
-                 "longitudinal_stiffness", "longitudinal_strength")},  # fmt: skip
+        "post": {k: float(getattr(g.posts, k)) for k in POST_FIELDS},
         "anchor": float(g.anchor_stiffness),
     }
 
@@ -112,7 +114,7 @@ def run_guardrail(g, forces, dt, record_every=20) -> OpenSeesGuardrailRun:
 
     def record():
         lateral = [ops.nodeDisp(i + 1, 2) for i in range(n)]
-        post = [ops.eleResponse(tag, "force")[1] for tag in springs]
+        post = [ops.eleResponse(tag, "force")[4] for tag in springs]
         return lateral, post
 
     start = time.perf_counter()
