@@ -16,7 +16,8 @@ its displacement passes the failure displacement (barrierjax also drops the post
 longitudinal force then: OpenSees's springs fail one by one, a difference of the
 longitudinal post forces only); the anchors elastic `zeroLength` springs. Explicit central
 differences (`CentralDifference`, linear algorithm) at barrierjax's step; each node's force
-history a `Path` time series at that step.
+history a `Path` time series at that step. Or Newmark's implicit average acceleration at a
+multiple of the step (`newmark_every`), for the choice between the two schemes.
 """
 
 import time
@@ -57,9 +58,20 @@ def _guardrail_data(g):
     }
 
 
-def run_guardrail(g, forces, dt, record_every=20) -> OpenSeesGuardrailRun:
+def run_guardrail(g, forces, dt, record_every=20, newmark_every=None) -> OpenSeesGuardrailRun:
     """Drive the guardrail `g` (a `barrierjax.system.Guardrail` with a rate-independent
-    rail) by `forces` (n_steps, n_nodes, 2): each node's x and y force at each step."""
+    rail) by `forces` (n_steps, n_nodes, 2): each node's x and y force at each step of dt.
+
+    `newmark_every` = k: Newmark's average acceleration instead (implicit, Newton's
+    iterations to a displacement increment of 1e-9 m) at steps of k dt, the forces
+    averaged over each k steps (their impulse kept) and placed at the windows' middles;
+    `record_every` must then be a multiple of k."""
+    k = newmark_every or 1
+    if record_every % k:
+        raise ValueError(f"record_every ({record_every}) must be a multiple of {k}")
+    windows = forces.shape[0] // k
+    forces = forces[: windows * k].reshape(windows, k, *forces.shape[1:]).mean(1)
+    times = (np.arange(windows) + (0.5 if newmark_every else 0.0)) * k * dt
     ops = import_opensees()
     d = _guardrail_data(g)
     start = time.perf_counter()
@@ -99,7 +111,7 @@ def run_guardrail(g, forces, dt, record_every=20) -> OpenSeesGuardrailRun:
     loaded = np.argwhere(np.any(forces != 0.0, axis=0))  # (node, direction) pairs
     for tag, (node, direction) in enumerate(loaded, start=1):
         values = [float(v) for v in forces[:, node, direction]]
-        ops.timeSeries("Path", tag, "-dt", dt, "-values", *values)
+        ops.timeSeries("Path", tag, "-time", *map(float, times), "-values", *values)
         ops.pattern("Plain", tag, tag)
         load = [0.0, 0.0, 0.0]
         load[direction] = 1.0
@@ -107,8 +119,13 @@ def run_guardrail(g, forces, dt, record_every=20) -> OpenSeesGuardrailRun:
     ops.constraints("Plain")
     ops.numberer("RCM")
     ops.system("BandGeneral")
-    ops.algorithm("Linear")
-    ops.integrator("CentralDifference")
+    if newmark_every:
+        ops.test("NormDispIncr", 1e-9, 50)
+        ops.algorithm("Newton")
+        ops.integrator("Newmark", 0.5, 0.25)
+    else:
+        ops.algorithm("Linear")
+        ops.integrator("CentralDifference")
     ops.analysis("Transient")
     build = time.perf_counter() - start
 
@@ -119,11 +136,11 @@ def run_guardrail(g, forces, dt, record_every=20) -> OpenSeesGuardrailRun:
 
     start = time.perf_counter()
     lateral, post = [], []
-    for _ in range(forces.shape[0] // record_every):
+    for _ in range(windows * k // record_every):
         a, b = record()
         lateral.append(a)
         post.append(b)
-        if ops.analyze(record_every, dt) != 0:
+        if ops.analyze(record_every // k, k * dt) != 0:
             raise RuntimeError("OpenSees failed to step the guardrail")
     analysis = time.perf_counter() - start
     return OpenSeesGuardrailRun(np.asarray(lateral), np.asarray(post), build, analysis)

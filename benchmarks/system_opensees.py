@@ -12,7 +12,9 @@ failed post's longitudinal force with its lateral one, OpenSees's springs fail o
 and with posts that never fail (the same model in both). Compared: the rail's lateral displacements at every node every 20
 steps, the largest deflection and the posts' forces; and the wall time of OpenSees's run of
 the rail alone against barrierjax's run of the whole impact (vehicle, contact, rail, after
-compilation). `--quick`: 0.2 s of impact. Writes `system_opensees.json` to `--out`.
+compilation). Then, with the posts that never fail, OpenSees's explicit run against its
+implicit Newmark (average acceleration) at 4, 16 and 64 times the stable step: the error
+against barrierjax's explicit run, and the time. `--quick`: 0.2 s of impact. Writes `system_opensees.json` to `--out`.
 """
 
 import jax
@@ -92,7 +94,36 @@ def main():
          ("barrierjax s", "barrierjax_s", ".2f"), ("OpenSees s", "opensees_s", ".1f"),
          ("OpenSees / barrierjax", "speedup", ".1f")],
     )  # fmt: skip
-    write_json(args, "system_opensees", {"comparison": rows})
+    schemes = newmark_rows(s, lasting, duration, (4, 16) if args.quick else (4, 16, 64))
+    table(
+        "Explicit central differences or implicit Newmark (OpenSees, posts that never fail): "
+        "the rail's displacements against barrierjax's explicit run",
+        schemes,
+        [("scheme", "scheme", "s"), ("step s", "dt", ".3g"), ("steps", "steps", "d"),
+         ("largest diff / peak", "difference", ".1e"), ("OpenSees s", "seconds", ".1f")],
+    )  # fmt: skip
+    write_json(args, "system_opensees", {"comparison": rows, "schemes": schemes})
+
+
+def newmark_rows(s, barrier, duration, multiples):
+    """OpenSees's explicit run and its Newmark runs at `multiples` of the stable step, under
+    barrierjax's contact forces, against barrierjax's explicit run."""
+    dt = stable_step(barrier, contact_stiffness_bound(s.vehicle))
+    h = system_impact(s.vehicle, barrier, speed=s.speed, angle_deg=s.angle_deg,
+                      impact_point=s.impact_point, duration=duration, friction=s.friction,
+                      dt=dt, save_every=1).history  # fmt: skip
+    forces = np.asarray(h.contact_on_rail)
+    every = 64  # a multiple of every Newmark step
+    ours = np.asarray(h.rail_deflection)[::every]
+    rows = []
+    for k in (None, *multiples):
+        r = run_guardrail(barrier, forces, dt, every, newmark_every=k)
+        n = min(len(ours), len(r.lateral))
+        difference = np.max(np.abs(r.lateral[:n] - ours[:n])) / np.max(np.abs(ours))
+        rows.append({"scheme": "central differences" if k is None else "Newmark",
+                     "dt": dt * (k or 1), "steps": forces.shape[0] // (k or 1),
+                     "difference": float(difference), "seconds": r.analysis_seconds})  # fmt: skip
+    return rows
 
 
 if __name__ == "__main__":
