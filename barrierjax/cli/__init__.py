@@ -7,6 +7,8 @@
                                  [--asi-edition 2010|1998] [--json] [--out DIR] [--no-plots]
     barrierjax figures [--out DIR] [--only NUMBER ...]
     barrierjax optimize [--json]
+    barrierjax sweep [SCENE.toml] --vary KEY=LOW:HIGH [--vary ...] --samples N [--seed S]
+                     [--distribution uniform|lhs|normal] --out FILE [--resume]
 
 `run` solves a scene file (the built-in default scene without one; format in
 `barrierjax.scene_file`) with `barrierjax.simulate`, prints a summary (or one JSON object
@@ -14,7 +16,8 @@ in SI units with `--json`) and writes plots of the histories; `run cantilever-1`
 runs the report's beam Example 1 (2, 3) of 4.3 with `barrierjax.beam.report_example`
 instead, in the report's inch-pound units. `figures` writes the
 report's figures (`barrierjax.figures.FIGURES`). `optimize` runs the default barrier
-design of `barrierjax.design`.
+design of `barrierjax.design`. `sweep` solves a scene over ranges of its keys into a
+Parquet or CSV file (`barrierjax.sweep`).
 
 The command is thin: the work is done by public functions (`scene_file.load_scene`,
 `simulate`, `result_dict`, `format_summary`, `plotting.write_run_plots`,
@@ -55,6 +58,7 @@ from .figures import figures_command
 from .optimize import optimize_command
 from .output import EXIT_FAILED, EXIT_OK, EXIT_USAGE, CommandError, enable_x64
 from .run import STANDARD_GRAVITY, format_summary, result_dict, run_command
+from .sweep import sweep_command
 
 __all__ = [
     "CANTILEVER",
@@ -226,6 +230,34 @@ def build_parser() -> argparse.ArgumentParser:
         description="Size the default barrier with barrierjax.design.optimize_default "
         "and print its report.",
     )
+    sweep = _add_command(
+        commands,
+        "sweep",
+        sweep_command,
+        help="solve a scene over ranges of its keys into a Parquet or CSV file",
+        description="Draw --samples scenarios of the scene (the default scene without one) "
+        "with each --vary key between its bounds, solve them in batches and write one row "
+        "each (the varied inputs and every scalar result, SI) to --out, chunk by chunk: an "
+        "interrupted sweep carries on with --resume. Prints a summary and plots each output "
+        "against each input (OUT.png).",
+    )
+    sweep.add_argument("scene", nargs="?", type=Path, metavar="SCENE.toml",
+                       help="the scene (default: the built-in default scene)")  # fmt: skip
+    sweep.add_argument("--vary", action="append", metavar="KEY=LOW:HIGH",
+                       help="a dotted scene key and its range, in the key's units or with "
+                       "units: impact.speed=30km/h:60km/h, vehicle.mass=1000:2500")  # fmt: skip
+    sweep.add_argument("--samples", type=int, required=True, metavar="N")
+    sweep.add_argument("--seed", type=int, default=0, metavar="S")
+    sweep.add_argument("--distribution", default="uniform",
+                       help="uniform (default), lhs (Latin hypercube) or normal (mean at "
+                       "the middle, the half-range two standard deviations, clipped)")  # fmt: skip
+    sweep.add_argument("--out", type=Path, required=True, metavar="FILE",
+                       help="the rows: FILE.parquet, or FILE.csv")  # fmt: skip
+    sweep.add_argument("--resume", action="store_true",
+                       help="carry on an interrupted sweep (its chunks in FILE.parts/)")  # fmt: skip
+    sweep.add_argument("--chunk", type=int, default=65536, metavar="N",
+                       help="scenarios solved at once (default 65536)")  # fmt: skip
+    sweep.add_argument("--no-plots", action="store_true", help="do not write the plot")
     return parser
 
 

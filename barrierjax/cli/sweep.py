@@ -1,0 +1,87 @@
+"""`barrierjax sweep`: a scene over ranges of its keys into a Parquet (or CSV) file, with a
+progress bar, resumable (`barrierjax.sweep`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .output import EXIT_OK, EXIT_USAGE, CommandError, progress
+
+__all__ = ["format_sweep_summary", "sweep_command"]
+
+
+def format_sweep_summary(columns: dict, out: Path, seconds: float) -> str:
+    """Each column's least, mean and largest value, and where the rows went."""
+    import numpy as np
+
+    n = len(next(iter(columns.values())))
+    width = max(len(name) for name in columns)
+    lines = [f"{n} scenarios in {seconds:.1f} s ({n / seconds:,.0f} per second) -> {out}", "",
+             f"{'column'.ljust(width)}  {'least':>12}  {'mean':>12}  {'largest':>12}"]  # fmt: skip
+    for name, values in columns.items():
+        values = np.asarray(values, float)
+        lines.append(f"{name.ljust(width)}  {values.min():12.5g}  {values.mean():12.5g}  "
+                     f"{values.max():12.5g}")  # fmt: skip
+    return "\n".join(lines)
+
+
+def _plot(columns: dict, inputs: list[str], path: Path):
+    """Each output of note against each varied input, on a subsample of the rows."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    outputs = [name for name in ("damage", "max_deflection", "duration", "exit_angle_deg")
+               if name in columns and np.ptp(columns[name]) > 0]  # fmt: skip
+    n = len(columns[inputs[0]])
+    rows = np.random.default_rng(0).choice(n, min(n, 20000), replace=False)
+    fig, axes = plt.subplots(len(outputs), len(inputs), squeeze=False,
+                             figsize=(3.2 * len(inputs), 2.4 * len(outputs)))  # fmt: skip
+    for i, output in enumerate(outputs):
+        for j, key in enumerate(inputs):
+            ax = axes[i, j]
+            ax.plot(columns[key][rows], columns[output][rows], ",", alpha=0.5)
+            ax.set_xlabel(key if i == len(outputs) - 1 else "")
+            ax.set_ylabel(output if j == 0 else "")
+    fig.suptitle(f"{n} scenarios ({len(rows)} plotted)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def sweep_command(args) -> int:
+    """`barrierjax sweep [SCENE.toml] --vary KEY=LOW:HIGH ... --samples N --out FILE`."""
+    import time
+
+    from tqdm import tqdm
+
+    from .. import scene_file
+    from ..sweep import Sweep, SweepError, parse_vary, parts_folder, run_sweep
+
+    scene = scene_file.default_scene() if args.scene is None else scene_file.load_scene(args.scene)
+    try:
+        varies = [parse_vary(text) for text in args.vary or ()]
+        sweep = Sweep(varies, args.samples, args.seed, args.distribution, args.chunk)
+        if args.chunk < 1:
+            raise SweepError(f"--chunk must be a positive integer; got {args.chunk}")
+        start = time.perf_counter()
+        with tqdm(total=args.samples, unit="scenario", unit_scale=True, file=None,
+                  desc="sweep", leave=False) as bar:  # fmt: skip
+            columns = run_sweep(scene, sweep, args.out, resume=args.resume, progress=bar.update)
+        seconds = time.perf_counter() - start
+    except SweepError as error:
+        raise CommandError(str(error), EXIT_USAGE) from None
+    except KeyboardInterrupt:
+        raise CommandError(
+            f"interrupted: the finished chunks are in {parts_folder(args.out)}; "
+            f"the same command with --resume carries on",
+            130,
+        ) from None
+    print(format_sweep_summary(columns, args.out, seconds))
+    if not args.no_plots:
+        path = args.out.with_suffix(".png")
+        _plot(columns, [v.key for v in varies], path)
+        progress(f"writing {path}")
+    return EXIT_OK

@@ -1,0 +1,222 @@
+"""Sweeps of a scene over ranges of its keys: scenarios drawn from a distribution, solved by
+`barrierjax.simulate` in batches of one compiled shape, written as they finish.
+
+A sweep varies dotted scene keys (`impact.speed`, `impact.angle`, `vehicle.mass`,
+`barrier.backing_strength`, ...: any key of `scene_file.FIELDS`) between bounds written
+as scene-file quantities ("30 km/h") or as bare numbers in the key's SI unit (degrees for
+an angle). The scenarios (`draw`) are uniform, Latin hypercube (`lhs`: each of N equal
+strata of every key drawn once) or normal (`normal`: mean at the middle of the range, the
+half-range two standard deviations, clipped to the range), all from one seed, so that a
+sweep is the same file whenever it runs. Each row of the result holds the varied inputs
+(SI, named by their keys) and every scalar field of the `Result` (SI).
+
+Rows are solved in chunks of one size (the last padded), each written to its own Parquet
+file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are joined into
+`OUT` (Parquet, or CSV for a `.csv` name) and the folder removed. An interrupted sweep
+leaves its finished chunks: `resume=True` with the same sweep solves only the rest.
+"""
+
+import json
+import math
+import os
+import shutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .scene import Scene
+from .scene_file import FIELDS, Field, SceneFileError, parse_quantity
+from .simulate import Result, simulate
+
+DISTRIBUTIONS = ("uniform", "lhs", "normal")
+
+
+class SweepError(ValueError):
+    """A sweep that cannot run, in one line naming what is wrong."""
+
+
+@dataclass(frozen=True)
+class Vary:
+    """A scene key varied between `low` and `high` (in the key's unit, `field.unit`)."""
+
+    key: str
+    low: float
+    high: float
+    field: Field
+
+
+def parse_vary(text: str) -> Vary:
+    """`KEY=LOW:HIGH` (e.g. "impact.speed=30 km/h:60 km/h", "vehicle.mass=1000:2500")."""
+    key, equals, bounds = text.partition("=")
+    key = key.strip()
+    section, dot, name = key.partition(".")
+    if not dot or section not in FIELDS or name not in FIELDS[section]:
+        keys = ", ".join(f"{s}.{k}" for s, fields in FIELDS.items() for k in fields)
+        raise SweepError(f"--vary {key!r}: unknown key (expected one of {keys})")
+    field = FIELDS[section][name]
+    low, colon, high = bounds.partition(":")
+    if not equals or not colon:
+        raise SweepError(f"--vary {key}: expected {key}=LOW:HIGH, got {text!r}")
+    values = []
+    for bound in (low.strip(), high.strip()):
+        try:
+            number = float(bound)
+            bound = f"{number} {field.unit}" if field.dimension is not None else number
+        except ValueError:
+            pass
+        try:
+            values.append(parse_quantity(bound, field))
+        except SceneFileError as error:
+            message = str(error).split(": ", 1)[-1]
+            raise SweepError(f"--vary {key}: {message}") from None
+    if not values[0] < values[1]:
+        raise SweepError(f"--vary {key}: empty range {values[0]:g} to {values[1]:g} "
+                         f"{field.unit} (LOW must be below HIGH)")  # fmt: skip
+    return Vary(key, values[0], values[1], field)
+
+
+def draw(varies: list[Vary], n: int, seed: int, distribution: str = "uniform") -> np.ndarray:
+    """`n` scenarios (n, len(varies)) in the keys' units."""
+    if distribution not in DISTRIBUTIONS:
+        raise SweepError(f"--distribution: unknown {distribution!r} (expected one of "
+                         f"{', '.join(DISTRIBUTIONS)})")  # fmt: skip
+    rng = np.random.default_rng(seed)
+    k = len(varies)
+    if distribution == "uniform":
+        unit = rng.random((n, k))
+    elif distribution == "lhs":
+        strata = np.stack([rng.permutation(n) for _ in range(k)], 1)
+        unit = (strata + rng.random((n, k))) / n
+    else:
+        unit = np.clip(0.5 + 0.25 * rng.standard_normal((n, k)), 0.0, 1.0)
+    low = np.array([v.low for v in varies])
+    high = np.array([v.high for v in varies])
+    return low + unit * (high - low)
+
+
+def _with_values(scene: Scene, varies: list[Vary], values) -> Scene:
+    """`scene` with each varied key an array of `values`' column."""
+    for v, column in zip(varies, values.T, strict=True):
+        parameter = v.field.parameter
+        scene = eqx.tree_at(lambda s, v=v, p=parameter: getattr(getattr(s, v.field.section), p),
+                            scene, column, is_leaf=lambda x: x is None)  # fmt: skip
+    return scene
+
+
+def result_columns(result: Result, n: int) -> dict[str, np.ndarray]:
+    """Every scalar field of a batch's `Result`, one value for each of its `n` scenarios
+    (a field the sweep does not vary, e.g. the peak force, repeated)."""
+    columns = {}
+    for name in result.__dataclass_fields__:
+        value = getattr(result, name)
+        if isinstance(value, jax.Array) and value.ndim <= 1:
+            columns[name] = np.broadcast_to(np.asarray(value), (n,))
+    return columns
+
+
+def _solver(scene: Scene, varies: list[Vary]) -> Callable:
+    oblique = any(v.key == "impact.angle" for v in varies) or float(scene.impact.angle_deg) < 90
+
+    @jax.jit
+    def solve(values):
+        batch = _with_values(scene, varies, values)
+        return simulate(batch, n_history=0, oblique=True if oblique else None)
+
+    return solve
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A sweep: what it varies, how many scenarios and how drawn, in chunks of `chunk`."""
+
+    varies: list[Vary]
+    samples: int
+    seed: int
+    distribution: str = "uniform"
+    chunk: int = 65536
+
+    def manifest(self, scene: Scene) -> dict:
+        leaves = [float(x) for x in jax.tree.leaves(scene)]
+        return {"vary": [[v.key, v.low, v.high] for v in self.varies], "samples": self.samples,
+                "seed": self.seed, "distribution": self.distribution, "chunk": self.chunk,
+                "scene": leaves}  # fmt: skip
+
+
+def parts_folder(out: Path) -> Path:
+    return out.with_name(out.name + ".parts")
+
+
+def run_sweep(scene: Scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
+    """Solve `sweep` of `scene` into the file `out` (see the module docstring); returns its
+    columns. `progress(n)` is called with the rows of each finished chunk."""
+    out = Path(out)
+    if sweep.samples < 1:
+        raise SweepError(f"--samples must be a positive integer; got {sweep.samples}")
+    if not sweep.varies:
+        raise SweepError("nothing to vary: give at least one --vary KEY=LOW:HIGH")
+    values = draw(sweep.varies, sweep.samples, sweep.seed, sweep.distribution)
+    parts = parts_folder(out)
+    manifest = sweep.manifest(scene)
+    _prepare(parts, out, manifest, resume)
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    solve = _solver(scene, sweep.varies)
+    n_chunks = math.ceil(sweep.samples / sweep.chunk)
+    for index in range(n_chunks):
+        path = parts / f"part-{index:05d}.parquet"
+        rows = values[index * sweep.chunk : (index + 1) * sweep.chunk]
+        if path.exists():
+            if progress:
+                progress(len(rows))
+            continue
+        padded = np.concatenate([rows, np.repeat(rows[-1:], sweep.chunk - len(rows), 0)])
+        columns = result_columns(solve(jnp.asarray(padded)), sweep.chunk)
+        table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
+        table |= {name: column[: len(rows)] for name, column in columns.items()}
+        partial = path.with_suffix(".partial")
+        pq.write_table(pa.table(table), partial)
+        os.replace(partial, path)  # a chunk is there whole, or not at all
+        if progress:
+            progress(len(rows))
+    joined = pa.concat_tables([pq.read_table(parts / f"part-{i:05d}.parquet")
+                               for i in range(n_chunks)])  # fmt: skip
+    partial = out.with_name(out.name + ".partial")
+    if out.suffix.lower() == ".csv":
+        import pyarrow.csv
+
+        pyarrow.csv.write_csv(joined, partial)
+    else:
+        pq.write_table(joined, partial)
+    os.replace(partial, out)
+    shutil.rmtree(parts)
+    return {name: joined.column(name).to_numpy() for name in joined.column_names}
+
+
+def _prepare(parts: Path, out: Path, manifest: dict, resume: bool):
+    """The chunks' folder, new or (resuming) the same sweep's; refuses anything else in
+    one line."""
+    record = parts / "manifest.json"
+    if parts.exists():
+        if not resume:
+            raise SweepError(f"{parts} holds an unfinished sweep: pass --resume to carry it "
+                             f"on, or remove it")  # fmt: skip
+        try:
+            previous = json.loads(record.read_text())
+        except (OSError, ValueError):
+            raise SweepError(f"{parts}: no readable manifest.json; remove the folder") from None
+        if previous != manifest:
+            raise SweepError(f"{parts} holds a different sweep (another scene, keys, ranges, "
+                             f"samples, seed, distribution or chunk): remove it or match it")  # fmt: skip
+        return
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        parts.mkdir()
+        record.write_text(json.dumps(manifest))
+    except OSError as error:
+        raise SweepError(f"--out {out}: cannot write there ({error.strerror or error})") from None

@@ -1,0 +1,109 @@
+"""`barrierjax sweep` (`barrierjax.sweep`): rows equal single runs, an interrupted sweep
+resumed gives the same file, the distributions, and bad sweeps refused in one line."""
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from barrierjax import Impact, Scene, simulate
+from barrierjax.cli import main
+from barrierjax.scene_file import default_scene
+from barrierjax.sweep import Sweep, SweepError, draw, parse_vary, parts_folder, run_sweep
+
+
+def _varies(*texts):
+    return [parse_vary(t) for t in texts]
+
+
+@pytest.fixture
+def normal_sweep(tmp_path):
+    varies = _varies("impact.speed=20 km/h:60 km/h", "vehicle.mass=1000:2500")
+    return Sweep(varies, 5, seed=3, chunk=4), tmp_path / "rows.parquet"
+
+
+def test_each_row_is_the_single_run_of_its_scene(normal_sweep):
+    sweep, out = normal_sweep
+    columns = run_sweep(default_scene(), sweep, out)
+    assert out.exists() and not parts_folder(out).exists()
+    base = default_scene()
+    for i in range(sweep.samples):
+        speed, mass = columns["impact.speed"][i], columns["vehicle.mass"][i]
+        vehicle = type(base.vehicle)(mass, base.vehicle.crush_force)
+        one = simulate(Scene(base.barrier, vehicle, Impact(speed)), n_history=0)
+        for name in ("damage", "max_deflection", "duration", "kinetic_energy"):
+            assert columns[name][i] == pytest.approx(float(getattr(one, name)), rel=1e-12)
+    assert 20 / 3.6 <= columns["impact.speed"].min() and columns["impact.speed"].max() <= 60 / 3.6
+
+
+def test_an_oblique_sweep_over_angles_equals_single_runs(tmp_path):
+    varies = _varies("impact.angle=20:40")
+    columns = run_sweep(default_scene(), Sweep(varies, 3, seed=1, chunk=2), tmp_path / "o.csv")
+    base = default_scene()
+    for i, angle in enumerate(columns["impact.angle"]):
+        one = simulate(Scene(base.barrier, base.vehicle, Impact(base.impact.speed, angle)),
+                       n_history=0)  # fmt: skip
+        assert columns["exit_angle_deg"][i] == pytest.approx(float(one.exit_angle_deg), rel=1e-9)
+    assert (tmp_path / "o.csv").read_text().startswith('"impact.angle"')
+
+
+def test_an_interrupted_sweep_resumed_gives_the_same_file(normal_sweep, tmp_path):
+    sweep, out = normal_sweep
+    finished = []
+
+    def stop_after_one(rows):
+        finished.append(rows)
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(default_scene(), sweep, out, progress=stop_after_one)
+    parts = parts_folder(out)
+    assert [p.name for p in sorted(parts.glob("part-*"))] == ["part-00000.parquet"]
+    with pytest.raises(SweepError, match="--resume"):
+        run_sweep(default_scene(), sweep, out)
+    with pytest.raises(SweepError, match="different sweep"):
+        run_sweep(default_scene(), Sweep(sweep.varies, 6, 3, chunk=4), out, resume=True)
+    run_sweep(default_scene(), sweep, out, resume=True)
+    whole = tmp_path / "whole.parquet"
+    run_sweep(default_scene(), sweep, whole)
+    assert pq.read_table(out).equals(pq.read_table(whole))
+
+
+def test_the_distributions_draw_within_the_range():
+    varies = _varies("impact.speed=10:20", "vehicle.mass=1000:2000")
+    lhs = draw(varies, 50, seed=0, distribution="lhs")
+    for j, v in enumerate(varies):
+        strata = np.floor((lhs[:, j] - v.low) / (v.high - v.low) * 50).astype(int)
+        assert sorted(strata) == list(range(50))  # each stratum once
+    normal = draw(varies, 20000, seed=0, distribution="normal")
+    assert np.all((normal >= [10, 1000]) & (normal <= [20, 2000]))
+    assert normal[:, 0].mean() == pytest.approx(15.0, abs=0.05)
+    assert normal[:, 0].std() == pytest.approx(2.5 * 0.98, rel=0.05)  # clipped beyond 2 sd
+    assert np.array_equal(draw(varies, 5, 7), draw(varies, 5, 7))
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--vary", "impact.sped=1:2"], "--vary 'impact.sped': unknown key"),
+        (["--vary", "impact.speed=60 km/h:20 km/h"], "--vary impact.speed: empty range"),
+        (["--vary", "impact.speed=20 kg:30 kg"], "--vary impact.speed: expected a speed"),
+        (["--vary", "impact.speed"], "--vary impact.speed: expected impact.speed=LOW:HIGH"),
+        (["--vary", "impact.speed=1:2", "--distribution", "beta"], "--distribution: unknown"),
+        (["--vary", "impact.speed=1:2", "--samples", "0"], "--samples must be a positive"),
+    ],
+)
+def test_bad_sweeps_exit_2_with_one_line_and_write_nothing(capsys, tmp_path, args, message):
+    out = tmp_path / "rows.parquet"
+    full = ["sweep", "--samples", "10", "--out", str(out), *args]
+    assert main(full) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"error: {message}")
+    assert not out.exists() and not parts_folder(out).exists()
+
+
+def test_an_unwritable_output_is_refused_in_one_line(capsys, tmp_path):
+    blocked = tmp_path / "file"
+    blocked.write_text("")
+    out = blocked / "rows.parquet"  # a folder that is a file
+    assert main(["sweep", "--vary", "impact.speed=1:2", "--samples", "4", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].startswith(f"error: --out {out}")
