@@ -10,7 +10,8 @@ half-range two standard deviations, clipped to the range), all from one seed, so
 sweep is the same file whenever it runs. Each row of the result holds the varied inputs
 (SI, named by their keys) and every scalar field of the `Result` (SI).
 
-Rows are solved in chunks of one size (the last padded), each written to its own Parquet
+Rows are solved in chunks of one size (the last padded), sharded across every local
+device (`jax.sharding`: a multi-core or multi-GPU host splits each chunk's rows), each written to its own Parquet
 file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are joined into
 `OUT` (Parquet, or CSV for a `.csv` name) and the folder removed. An interrupted sweep
 leaves its finished chunks: `resume=True` with the same sweep solves only the rest.
@@ -28,6 +29,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from .scene import Scene
 from .scene_file import FIELDS, Field, SceneFileError, parse_quantity
@@ -120,14 +122,20 @@ def result_columns(result: Result, n: int) -> dict[str, np.ndarray]:
 
 
 def _solver(scene: Scene, varies: list[Vary]) -> Callable:
+    """The batch's solve, its rows sharded across every local device (one device: a plain
+    jit; `XLA_FLAGS=--xla_force_host_platform_device_count=N` emulates N on a CPU)."""
     oblique = any(v.key == "impact.angle" for v in varies) or float(scene.impact.angle_deg) < 90
 
-    @jax.jit
     def solve(values):
         batch = _with_values(scene, varies, values)
         return simulate(batch, n_history=0, oblique=True if oblique else None)
 
-    return solve
+    devices = jax.local_devices()
+    if len(devices) == 1:
+        return jax.jit(solve)
+    rows = NamedSharding(Mesh(np.array(devices), ("rows",)), PartitionSpec("rows"))
+    sharded = jax.jit(solve, in_shardings=rows)
+    return lambda values: sharded(jax.device_put(values, rows))
 
 
 @dataclass(frozen=True)
@@ -166,6 +174,9 @@ def run_sweep(scene: Scene, sweep: Sweep, out, *, resume=False, progress=None) -
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    if sweep.chunk % jax.local_device_count():
+        raise SweepError(f"--chunk {sweep.chunk} must be a multiple of the "
+                         f"{jax.local_device_count()} local devices")  # fmt: skip
     solve = _solver(scene, sweep.varies)
     n_chunks = math.ceil(sweep.samples / sweep.chunk)
     for index in range(n_chunks):

@@ -107,3 +107,27 @@ def test_an_unwritable_output_is_refused_in_one_line(capsys, tmp_path):
     out = blocked / "rows.parquet"  # a folder that is a file
     assert main(["sweep", "--vary", "impact.speed=1:2", "--samples", "4", "--out", str(out)]) == 2
     assert capsys.readouterr().err.strip().splitlines()[-1].startswith(f"error: --out {out}")
+
+
+def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
+    """The chunk's rows sharded over 4 host-emulated devices (a process of its own:
+    the device count is fixed at start-up) against this process's one device."""
+    import os
+    import subprocess
+    import sys
+
+    args = ["sweep", "--vary", "impact.speed=20 km/h:60 km/h", "--vary", "vehicle.mass=1000:2500",
+            "--samples", "100", "--chunk", "64", "--no-plots"]  # fmt: skip
+    four = tmp_path / "four.parquet"
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=4"}
+    code = ("import jax, sys; from barrierjax.cli import main; assert jax.local_device_count() "
+            "== 4; sys.exit(main(sys.argv[1:]))")  # fmt: skip
+    subprocess.run([sys.executable, "-c", code, *args, "--out", str(four)], env=env, check=True,
+                   capture_output=True)  # fmt: skip
+    one = tmp_path / "one.parquet"
+    assert main([*args, "--out", str(one)]) == 0
+    a, b = pq.read_table(four), pq.read_table(one)
+    assert a.column_names == b.column_names
+    for name in a.column_names:
+        np.testing.assert_allclose(a.column(name).to_numpy(), b.column(name).to_numpy(),
+                                   rtol=1e-12, atol=0)  # fmt: skip
