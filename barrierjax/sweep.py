@@ -10,7 +10,8 @@ half-range two standard deviations, clipped to the range), all from one seed, so
 sweep is the same file whenever it runs. Each row of the result holds the varied inputs
 (SI, named by their keys) and every scalar field of the `Result` (SI).
 
-Rows are solved in chunks of one size (the last padded), sharded across every local
+Rows are solved in chunks of one size (at most `chunk`, as equal as the count allows, the
+last padded), sharded across every local
 device (`jax.sharding`: a multi-core or multi-GPU host splits each chunk's rows), each written to its own Parquet
 file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are joined into
 `OUT` (Parquet, or CSV for a `.csv` name) and the folder removed. An interrupted sweep
@@ -174,20 +175,20 @@ def run_sweep(scene: Scene, sweep: Sweep, out, *, resume=False, progress=None) -
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    if sweep.chunk % jax.local_device_count():
-        raise SweepError(f"--chunk {sweep.chunk} must be a multiple of the "
-                         f"{jax.local_device_count()} local devices")  # fmt: skip
     solve = _solver(scene, sweep.varies)
+    # Chunks of equal size, at most `chunk`, a multiple of the device count: little padding.
     n_chunks = math.ceil(sweep.samples / sweep.chunk)
+    devices = jax.local_device_count()
+    size = devices * math.ceil(sweep.samples / n_chunks / devices)
     for index in range(n_chunks):
         path = parts / f"part-{index:05d}.parquet"
-        rows = values[index * sweep.chunk : (index + 1) * sweep.chunk]
+        rows = values[index * size : (index + 1) * size]
         if path.exists():
             if progress:
                 progress(len(rows))
             continue
-        padded = np.concatenate([rows, np.repeat(rows[-1:], sweep.chunk - len(rows), 0)])
-        columns = result_columns(solve(jnp.asarray(padded)), sweep.chunk)
+        padded = np.concatenate([rows, np.repeat(rows[-1:], size - len(rows), 0)])
+        columns = result_columns(solve(jnp.asarray(padded)), size)
         table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
         table |= {name: column[: len(rows)] for name, column in columns.items()}
         partial = path.with_suffix(".partial")
