@@ -18,6 +18,7 @@ file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are j
 leaves its finished chunks: `resume=True` with the same sweep solves only the rest.
 """
 
+import hashlib
 import json
 import math
 import os
@@ -53,15 +54,16 @@ class Vary:
     field: Field
 
 
-def parse_vary(text: str) -> Vary:
-    """`KEY=LOW:HIGH` (e.g. "impact.speed=30 km/h:60 km/h", "vehicle.mass=1000:2500")."""
+def parse_vary(text: str, fields: dict = FIELDS) -> Vary:
+    """`KEY=LOW:HIGH` (e.g. "impact.speed=30 km/h:60 km/h", "vehicle.mass=1000:2500"), a key
+    of `fields` (a barrier-system scene's: `system.sweep.SWEEP_FIELDS`)."""
     key, equals, bounds = text.partition("=")
     key = key.strip()
     section, dot, name = key.partition(".")
-    if not dot or section not in FIELDS or name not in FIELDS[section]:
-        keys = ", ".join(f"{s}.{k}" for s, fields in FIELDS.items() for k in fields)
+    if not dot or section not in fields or name not in fields[section]:
+        keys = ", ".join(f"{s}.{k}" for s, table in fields.items() for k in table)
         raise SweepError(f"--vary {key!r}: unknown key (expected one of {keys})")
-    field = FIELDS[section][name]
+    field = fields[section][name]
     low, colon, high = bounds.partition(":")
     if not equals or not colon:
         raise SweepError(f"--vary {key}: expected {key}=LOW:HIGH, got {text!r}")
@@ -133,10 +135,12 @@ def _solver(scene: Scene, varies: list[Vary]) -> Callable:
 
     devices = jax.local_devices()
     if len(devices) == 1:
-        return jax.jit(solve)
-    rows = NamedSharding(Mesh(np.array(devices), ("rows",)), PartitionSpec("rows"))
-    sharded = jax.jit(solve, in_shardings=rows)
-    return lambda values: sharded(jax.device_put(values, rows))
+        solved = jax.jit(solve)
+    else:
+        rows = NamedSharding(Mesh(np.array(devices), ("rows",)), PartitionSpec("rows"))
+        sharded = jax.jit(solve, in_shardings=rows)
+        solved = lambda values: sharded(jax.device_put(values, rows))
+    return lambda values: result_columns(solved(jnp.asarray(values)), len(values))
 
 
 @dataclass(frozen=True)
@@ -149,20 +153,30 @@ class Sweep:
     distribution: str = "uniform"
     chunk: int = 65536
 
-    def manifest(self, scene: Scene) -> dict:
-        leaves = [float(x) for x in jax.tree.leaves(scene)]
+    def manifest(self, scene) -> dict:
+        if isinstance(scene, Scene):
+            numbers = jax.tree.leaves(scene)
+        else:
+            from .system.sweep import scene_numbers
+
+            numbers = scene_numbers(scene)
+        digest = hashlib.sha256()
+        for x in numbers:
+            digest.update(np.asarray(x, np.float64).tobytes())
         return {"vary": [[v.key, v.low, v.high] for v in self.varies], "samples": self.samples,
                 "seed": self.seed, "distribution": self.distribution, "chunk": self.chunk,
-                "scene": leaves}  # fmt: skip
+                "scene": digest.hexdigest()}  # fmt: skip
 
 
 def parts_folder(out: Path) -> Path:
     return out.with_name(out.name + ".parts")
 
 
-def run_sweep(scene: Scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
-    """Solve `sweep` of `scene` into the file `out` (see the module docstring); returns its
-    columns. `progress(n)` is called with the rows of each finished chunk."""
+def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
+    """Solve `sweep` of `scene` (a `Scene`, or a barrier-system scene,
+    `system.scene.SystemScene`: its crash-test numbers, `system.design.crash_numbers`) into
+    the file `out` (see the module docstring); returns its columns. `progress(n)` is called
+    with the rows of each finished chunk."""
     out = Path(out)
     if sweep.samples < 1:
         raise SweepError(f"--samples must be a positive integer; got {sweep.samples}")
@@ -175,7 +189,12 @@ def run_sweep(scene: Scene, sweep: Sweep, out, *, resume=False, progress=None) -
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    solve = _solver(scene, sweep.varies)
+    if isinstance(scene, Scene):
+        solve = _solver(scene, sweep.varies)
+    else:
+        from .system.sweep import system_solver
+
+        solve = system_solver(scene, sweep.varies)
     # Chunks of equal size, at most `chunk`, a multiple of the device count: little padding.
     n_chunks = math.ceil(sweep.samples / sweep.chunk)
     devices = jax.local_device_count()
@@ -188,7 +207,7 @@ def run_sweep(scene: Scene, sweep: Sweep, out, *, resume=False, progress=None) -
                 progress(len(rows))
             continue
         padded = np.concatenate([rows, np.repeat(rows[-1:], size - len(rows), 0)])
-        columns = result_columns(solve(jnp.asarray(padded)), size)
+        columns = solve(padded)
         table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
         table |= {name: column[: len(rows)] for name, column in columns.items()}
         partial = path.with_suffix(".partial")

@@ -131,3 +131,49 @@ def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
     for name in a.column_names:
         np.testing.assert_allclose(a.column(name).to_numpy(), b.column(name).to_numpy(),
                                    rtol=1e-12, atol=0)  # fmt: skip
+
+
+SYSTEM_SCENE = """test = "MASH 3-11"
+[vehicle]
+preset = "2270P"
+[barrier]
+preset = "MGS"
+length = "30.48 m"
+elements_per_span = 4
+[impact]
+point = "10 m"
+duration = "0.15 s"
+"""
+
+
+def test_a_barrier_system_sweep_equals_single_runs_of_the_redesigned_system(tmp_path):
+    """Speed, post spacing and vehicle mass varied on a MASH 3-11 scene: each row is
+    `crash_numbers` of the system `redesign` gives, at the stable step of the shortest
+    spacing."""
+    from barrierjax.scene_file import read_toml
+    from barrierjax.system import stable_step
+    from barrierjax.system.design import crash_numbers, redesign
+    from barrierjax.system.scene import parse_system_scene
+    from barrierjax.system.sweep import SWEEP_FIELDS
+    from barrierjax.system.vehicle import contact_stiffness_bound
+
+    path = tmp_path / "mash.toml"
+    path.write_text(SYSTEM_SCENE)
+    scene = parse_system_scene(read_toml(path))
+    texts = ("impact.speed=90 km/h:110 km/h", "barrier.post_spacing=1.5:2.0",
+             "vehicle.mass=2000:2500")  # fmt: skip
+    varies = [parse_vary(t, SWEEP_FIELDS) for t in texts]
+    columns = run_sweep(scene, Sweep(varies, 2, seed=5, chunk=2), tmp_path / "rows.parquet")
+    _, stiffest = redesign(scene.vehicle, scene.barrier, post_spacing=1.5)
+    dt = stable_step(stiffest, contact_stiffness_bound(scene.vehicle))
+    for i in range(2):
+        vehicle, barrier = redesign(scene.vehicle, scene.barrier,
+                                    vehicle_mass=columns["vehicle.mass"][i],
+                                    post_spacing=columns["barrier.post_spacing"][i])  # fmt: skip
+        one = crash_numbers(vehicle, barrier, speed=columns["impact.speed"][i],
+                            angle_deg=scene.angle_deg, impact_point=scene.impact_point,
+                            duration=scene.duration, dt=dt, friction=scene.friction)  # fmt: skip
+        for name in ("dynamic_deflection", "working_width", "oiv_y", "exit_angle"):
+            assert columns[name][i] == pytest.approx(float(one[name]), rel=1e-9)
+    with pytest.raises(SweepError, match="unknown key"):
+        parse_vary("barrier.backing_strength=1:2", SWEEP_FIELDS)

@@ -33,7 +33,8 @@ def _plot(columns: dict, inputs: list[str], path: Path):
     import matplotlib.pyplot as plt
     import numpy as np
 
-    outputs = [name for name in ("damage", "max_deflection", "duration", "exit_angle_deg")
+    outputs = [name for name in ("damage", "max_deflection", "duration", "exit_angle_deg",
+                                 "dynamic_deflection", "working_width", "exit_angle", "oiv_y")
                if name in columns and np.ptp(columns[name]) > 0]  # fmt: skip
     n = len(columns[inputs[0]])
     rows = np.random.default_rng(0).choice(n, min(n, 20000), replace=False)
@@ -60,9 +61,21 @@ def sweep_command(args) -> int:
     from .. import scene_file
     from ..sweep import Sweep, SweepError, parse_vary, parts_folder, run_sweep
 
-    scene = scene_file.default_scene() if args.scene is None else scene_file.load_scene(args.scene)
+    fields = scene_file.FIELDS
+    if args.scene is None:
+        scene = scene_file.default_scene()
+    else:
+        from ..system.scene import is_system_scene, parse_system_scene
+
+        data = scene_file.read_toml(args.scene)
+        if is_system_scene(data):  # a crash test of a barrier system
+            from ..system.sweep import SWEEP_FIELDS
+
+            scene, fields = parse_system_scene(data), SWEEP_FIELDS
+        else:
+            scene = scene_file.parse_scene(data)
     try:
-        varies = [parse_vary(text) for text in args.vary or ()]
+        varies = [parse_vary(text, fields) for text in args.vary or ()]
         sweep = Sweep(varies, args.samples, args.seed, args.distribution, args.chunk)
         if args.chunk < 1:
             raise SweepError(f"--chunk must be a positive integer; got {args.chunk}")
