@@ -10,9 +10,9 @@ half-range two standard deviations, clipped to the range), all from one seed, so
 sweep is the same file whenever it runs. Each row of the result holds the varied inputs
 (SI, named by their keys) and every scalar field of the `Result` (SI).
 
-Rows are solved in chunks of one size (at most `chunk`, as equal as the count allows, the
-last padded), sharded across every local
-device (`jax.sharding`: a multi-core or multi-GPU host splits each chunk's rows), each written to its own Parquet
+Rows are solved in chunks (at most `chunk` rows, as equal as the count allows; each padded
+to one shape for the solve), sharded across every local device (`jax.sharding`: a
+multi-core or multi-GPU host splits each chunk's rows), each written to its own Parquet
 file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are joined into
 `OUT` (Parquet, or CSV for a `.csv` name) and the folder removed. An interrupted sweep
 leaves its finished chunks: `resume=True` with the same sweep solves only the rest.
@@ -180,6 +180,8 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
     out = Path(out)
     if sweep.samples < 1:
         raise SweepError(f"--samples must be a positive integer; got {sweep.samples}")
+    if sweep.chunk < 1:
+        raise SweepError(f"--chunk must be a positive integer; got {sweep.chunk}")
     if not sweep.varies:
         raise SweepError("nothing to vary: give at least one --vary KEY=LOW:HIGH")
     values = draw(sweep.varies, sweep.samples, sweep.seed, sweep.distribution)
@@ -195,10 +197,12 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
         from .system.sweep import system_solver
 
         solve = system_solver(scene, sweep.varies)
-    # Chunks of equal size, at most `chunk`, a multiple of the device count: little padding.
+    # Chunks as equal as the count allows, at most `chunk` (the files' layout, whatever the
+    # devices), each padded for the solve to one shape, a multiple of the device count.
     n_chunks = math.ceil(sweep.samples / sweep.chunk)
+    size = math.ceil(sweep.samples / n_chunks)
     devices = jax.local_device_count()
-    size = devices * math.ceil(sweep.samples / n_chunks / devices)
+    shape = devices * math.ceil(size / devices)
     for index in range(n_chunks):
         path = parts / f"part-{index:05d}.parquet"
         rows = values[index * size : (index + 1) * size]
@@ -206,7 +210,7 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
             if progress:
                 progress(len(rows))
             continue
-        padded = np.concatenate([rows, np.repeat(rows[-1:], size - len(rows), 0)])
+        padded = np.concatenate([rows, np.repeat(rows[-1:], shape - len(rows), 0)])
         columns = solve(padded)
         table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
         table |= {name: column[: len(rows)] for name, column in columns.items()}

@@ -177,3 +177,16 @@ def test_a_barrier_system_sweep_equals_single_runs_of_the_redesigned_system(tmp_
             assert columns[name][i] == pytest.approx(float(one[name]), rel=1e-9)
     with pytest.raises(SweepError, match="unknown key"):
         parse_vary("barrier.backing_strength=1:2", SWEEP_FIELDS)
+
+
+def test_chunks_do_not_depend_on_the_devices_and_a_bad_chunk_is_refused(tmp_path):
+    """The files' layout is the sweep's alone (a sweep resumed on another device count
+    finds its chunks where it left them)."""
+    varies = _varies("impact.speed=10:20")
+    out = tmp_path / "rows.parquet"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(default_scene(), Sweep(varies, 7, 0, chunk=3), out,
+                  progress=lambda n: (_ for _ in ()).throw(KeyboardInterrupt))  # fmt: skip
+    assert len(pq.read_table(parts_folder(out) / "part-00000.parquet")) == 3  # chunks of 3, 3 and 1
+    with pytest.raises(SweepError, match="--chunk must be a positive integer"):
+        run_sweep(default_scene(), Sweep(varies, 7, 0, chunk=0), tmp_path / "other.parquet")

@@ -77,8 +77,6 @@ def sweep_command(args) -> int:
     try:
         varies = [parse_vary(text, fields) for text in args.vary or ()]
         sweep = Sweep(varies, args.samples, args.seed, args.distribution, args.chunk)
-        if args.chunk < 1:
-            raise SweepError(f"--chunk must be a positive integer; got {args.chunk}")
         start = time.perf_counter()
         with tqdm(total=args.samples, unit="scenario", unit_scale=True, file=None,
                   desc="sweep", leave=False) as bar:  # fmt: skip
