@@ -16,7 +16,7 @@ stiffest member (`barrier.stable_step`).
 import equinox as eqx
 import jax.numpy as jnp
 
-from .assessment import system_occupant_risk
+from .assessment import summary, system_occupant_risk
 from .barrier import Guardrail
 from .impact import system_impact, time_grid
 from .vehicle import Vehicle
@@ -60,20 +60,11 @@ def redesign(
 
 
 def crash_numbers(vehicle: Vehicle, barrier, **impact) -> dict:
-    """The numbers a design is judged by, each a differentiable scalar: `working_width`,
-    `dynamic_deflection`, `exit_angle` and `exit_speed`, the occupant risk's `oiv_x`,
-    `oiv_y`, `ora_x`, `ora_y` (SI, degrees). `impact`: `system_impact`'s keywords."""
+    """The crash-test numbers a design is judged by (`assessment.summary`: containment,
+    exit speed and angle, dynamic deflection, working width, OIV, ORA, ASI, THIV, PHD; SI,
+    degrees), each a differentiable scalar but the containment flag, under a caller's jit
+    or vmap as well. `impact`: `system_impact`'s keywords."""
     result = system_impact(vehicle, barrier, **impact)
     options = {k: impact[k] for k in ("dt", "save_every") if k in impact}
     _, times = time_grid(vehicle, barrier, impact["duration"], **options)
-    risk = system_occupant_risk(result, times)
-    return {
-        "working_width": result.working_width,
-        "dynamic_deflection": result.dynamic_deflection,
-        "exit_angle": result.exit_angle_deg,
-        "exit_speed": result.exit_speed,
-        "oiv_x": risk.oiv_x,
-        "oiv_y": risk.oiv_y,
-        "ora_x": risk.ora_x,
-        "ora_y": risk.ora_y,
-    }
+    return summary(result, system_occupant_risk(result, times))

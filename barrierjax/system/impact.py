@@ -86,10 +86,7 @@ def system_impact(
     the guardrail's stable step, `barrier.stable_step`, or 1e-4 s for a wall)."""
     speed = positive("speed", speed)
     angle = jnp.radians(in_range("angle_deg", angle_deg, 0.0, 90.0))
-    concrete_rail = isinstance(barrier, Guardrail) and not any(
-        isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
-    )
-    if concrete_rail:
+    if _concrete_guardrail(vehicle, barrier):
         length = float(np.asarray(barrier.rail.coords)[-1, 0])
         if not isinstance(impact_point, jax.core.Tracer) and not 0 < float(impact_point) < length:
             raise ValueError(
@@ -100,22 +97,27 @@ def system_impact(
                       dt=dt, n_saved=len(times), save_every=int(save_every))  # fmt: skip
 
 
+def _concrete_guardrail(vehicle, barrier) -> bool:
+    """A guardrail whose data (and the vehicle's) are concrete: the checks that need numbers
+    can run."""
+    return isinstance(barrier, Guardrail) and not any(
+        isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
+    )
+
+
 def time_grid(vehicle: Vehicle, barrier, duration, dt=None, save_every: int = 20):
     """The step of `system_impact` (checked against the stable step where the guardrail is
     concrete) and the times of its saved samples (numpy: concrete, for
     `barrierjax.assess` under a caller's jit or vmap)."""
     if not (isinstance(duration, int | float) and 0 < duration < np.inf):
         raise ValueError(f"duration must be a positive number of seconds; got {duration!r}")
-    concrete_rail = isinstance(barrier, Guardrail) and not any(
-        isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((barrier, vehicle))
-    )
     if dt is None:
         dt = (
             1e-4
             if isinstance(barrier, RigidWall)
             else stable_step(barrier, contact_stiffness_bound(vehicle))
         )
-    elif concrete_rail and float(dt) > (
+    elif _concrete_guardrail(vehicle, barrier) and float(dt) > (
         largest := stable_step(barrier, contact_stiffness_bound(vehicle), 1.0)
     ):
         raise ValueError(
