@@ -20,14 +20,12 @@ history a `Path` time series at that step. Or Newmark's implicit average acceler
 multiple of the step (`newmark_every`), for the choice between the two schemes.
 """
 
+import dataclasses
 import time
 from typing import NamedTuple
 
 import numpy as np
 from _opensees_cantilever import import_opensees
-
-POST_FIELDS = ("stiffness", "strength", "failure", "longitudinal_stiffness",
-               "longitudinal_strength")  # fmt: skip
 
 
 class OpenSeesGuardrailRun(NamedTuple):
@@ -53,7 +51,7 @@ def _guardrail_data(g):
         "mass": np.asarray(g.node_mass),
         "inertia": np.asarray(g.rail.point_inertia),
         "posts": list(g.post_nodes),
-        "post": {k: float(getattr(g.posts, k)) for k in POST_FIELDS},
+        "post": {f.name: float(getattr(g.posts, f.name)) for f in dataclasses.fields(g.posts)},
         "anchor": float(g.anchor_stiffness),
     }
 

@@ -22,6 +22,7 @@ import jax
 jax.config.update("jax_enable_x64", True)
 
 from pathlib import Path
+from typing import NamedTuple
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -37,16 +38,32 @@ SCENE = Path(__file__).resolve().parent.parent / "examples" / "mash_3_11.toml"
 RECORD_EVERY = 20
 
 
-def compare(s, barrier, duration):
-    """barrierjax's run of the impact, and OpenSees's of its rail under the run's contact
-    forces: one table row."""
+class Recorded(NamedTuple):
+    """barrierjax's run of the impact kept at every step: its step and options, the
+    contact's forces on the rail, the rail's lateral displacements and the posts' forces."""
+
+    dt: float
+    options: dict
+    forces: np.ndarray
+    deflection: np.ndarray
+    post_force: np.ndarray
+
+
+def record(s, barrier, duration) -> Recorded:
     dt = stable_step(barrier, contact_stiffness_bound(s.vehicle))
     options = {"speed": s.speed, "angle_deg": s.angle_deg, "impact_point": s.impact_point,
                "duration": duration, "friction": s.friction, "dt": dt}  # fmt: skip
     h = system_impact(s.vehicle, barrier, save_every=1, **options).history
-    forces = np.asarray(h.contact_on_rail)
-    ours = np.asarray(h.rail_deflection)[::RECORD_EVERY]
-    our_posts = np.asarray(h.post_force)[::RECORD_EVERY]
+    return Recorded(dt, options, *(np.asarray(x) for x in (h.contact_on_rail,
+                                                           h.rail_deflection, h.post_force)))  # fmt: skip
+
+
+def compare(s, barrier, recorded: Recorded):
+    """barrierjax's run of the impact, and OpenSees's of its rail under the run's contact
+    forces: one table row."""
+    dt, options, forces = recorded.dt, recorded.options, recorded.forces
+    ours = recorded.deflection[::RECORD_EVERY]
+    our_posts = recorded.post_force[::RECORD_EVERY]
 
     def run():
         return jax.block_until_ready(system_impact(s.vehicle, barrier, **options))
@@ -78,9 +95,10 @@ def main():
     s = load_system_scene(SCENE)
     duration = 0.2 if args.quick else 0.6
     lasting = eqx.tree_at(lambda g: g.posts.failure, s.barrier, jnp.asarray(10.0))
+    lasting_run = record(s, lasting, duration)  # for the comparison and for the schemes
     rows = [
-        {"posts": "MGS (fail at 0.4 m)"} | compare(s, s.barrier, duration),
-        {"posts": "never failing"} | compare(s, lasting, duration),
+        {"posts": "MGS (fail at 0.4 m)"} | compare(s, s.barrier, record(s, s.barrier, duration)),
+        {"posts": "never failing"} | compare(s, lasting, lasting_run),
     ]
     table(
         f"MASH 3-11 rail and posts, {duration} s: barrierjax (whole impact) against OpenSees "
@@ -94,7 +112,7 @@ def main():
          ("barrierjax s", "barrierjax_s", ".2f"), ("OpenSees s", "opensees_s", ".1f"),
          ("OpenSees / barrierjax", "speedup", ".1f")],
     )  # fmt: skip
-    schemes = newmark_rows(s, lasting, duration, (4, 16) if args.quick else (4, 16, 64))
+    schemes = newmark_rows(lasting, lasting_run, (4, 16) if args.quick else (4, 16, 64))
     table(
         "Explicit central differences or implicit Newmark (OpenSees, posts that never fail): "
         "the rail's displacements against barrierjax's explicit run",
@@ -105,16 +123,12 @@ def main():
     write_json(args, "system_opensees", {"comparison": rows, "schemes": schemes})
 
 
-def newmark_rows(s, barrier, duration, multiples):
+def newmark_rows(barrier, recorded: Recorded, multiples):
     """OpenSees's explicit run and its Newmark runs at `multiples` of the stable step, under
     barrierjax's contact forces, against barrierjax's explicit run."""
-    dt = stable_step(barrier, contact_stiffness_bound(s.vehicle))
-    h = system_impact(s.vehicle, barrier, speed=s.speed, angle_deg=s.angle_deg,
-                      impact_point=s.impact_point, duration=duration, friction=s.friction,
-                      dt=dt, save_every=1).history  # fmt: skip
-    forces = np.asarray(h.contact_on_rail)
+    dt, forces = recorded.dt, recorded.forces
     every = 64  # a multiple of every Newmark step
-    ours = np.asarray(h.rail_deflection)[::every]
+    ours = recorded.deflection[::every]
     rows = []
     for k in (None, *multiples):
         r = run_guardrail(barrier, forces, dt, every, newmark_every=k)
