@@ -5,15 +5,26 @@ deflection limit, by gradients (augmented Lagrangian with optax), checked by bru
 (`summary()`, `as_dict()`); `SizingProblem` states a problem, `SteelTube` the section.
 """
 
-from .grid import GridResult, grid_search
-from .model import barrier, constraint, objective, responses, rigid_wall_crush, to_design, to_unit
-from .optimizer import Solution, default_starts, polish, solve
+from .formulation import Formulation
+from .grid import GridResult, grid_minimise, grid_search
+from .model import (
+    barrier,
+    constraint,
+    objective,
+    responses,
+    rigid_wall_crush,
+    sizing_formulation,
+    to_design,
+    to_unit,
+)
+from .optimizer import Solution, default_starts, minimise, polish, solve
 from .problem import ImpactCases, SizingProblem, default_cases
 from .report import DesignReport, optimize, optimize_default
 from .section import SteelTube, area, plastic_modulus
 
 __all__ = [
     "DesignReport",
+    "Formulation",
     "GridResult",
     "ImpactCases",
     "SizingProblem",
@@ -24,7 +35,9 @@ __all__ = [
     "constraint",
     "default_cases",
     "default_starts",
+    "grid_minimise",
     "grid_search",
+    "minimise",
     "objective",
     "optimize",
     "optimize_default",
@@ -32,6 +45,7 @@ __all__ = [
     "polish",
     "responses",
     "rigid_wall_crush",
+    "sizing_formulation",
     "solve",
     "to_design",
     "to_unit",

@@ -1,8 +1,9 @@
 r"""Brute-force reference for the sizing problem.
 
-`grid_search` evaluates the same objective and constraint on an n^3 grid, uniform in the
-same log coordinates, in one `jit(vmap)` call, then zooms in on the best feasible point;
-see its docstring for why the zoom is needed to make the comparison meaningful.
+`grid_minimise` evaluates a formulation's objective and constraints on an n^dim grid,
+uniform in the same log coordinates as the optimiser's, in one `jit(vmap)` call, then zooms
+in on the best feasible point; see its docstring for why the zoom is needed to make the
+comparison meaningful. `grid_search` does so for a `SizingProblem`.
 """
 
 import equinox as eqx
@@ -11,7 +12,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .model import responses, to_design
+from .formulation import Formulation
+from .model import sizing_formulation
 from .problem import SizingProblem
 
 
@@ -29,18 +31,73 @@ class GridResult(eqx.Module):
 
 
 @eqx.filter_jit
-def _evaluate_box(problem, low, high, shape: tuple[int, int, int]):
-    """Objective and constraint on the grid of `shape` points spanning [low, high] in
-    unit coordinates, all points x all cases in one vmapped call; returns the best
+def _evaluate_box(form: Formulation, low, high, shape: tuple[int, ...]):
+    """Objective and largest normalised constraint on the grid of `shape` points
+    spanning [low, high] in unit coordinates, in one vmapped call; returns the best
     feasible point (objective inf if none)."""
-    axes = [jnp.linspace(low[k], high[k], shape[k]) for k in range(3)]
-    u = jnp.stack(jnp.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    damage, deflection = jax.vmap(lambda v: responses(problem, v))(to_design(problem, u))
-    f = jnp.mean(damage, axis=-1)
-    c = jnp.max(deflection, axis=-1) - problem.deflection_limit
+    axes = [jnp.linspace(low[k], high[k], n) for k, n in enumerate(shape)]
+    u = jnp.stack(jnp.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(shape))
+    f, c = jax.vmap(form.evaluate)(u)
     masked = jnp.where(c <= 0.0, f, jnp.inf)
     k = jnp.argmin(masked)
     return u[k], masked[k], c[k]
+
+
+def grid_minimise(
+    form: Formulation,
+    n: int = 40,
+    *,
+    refine: int = 8,
+    refine_shape: tuple[int, ...] | None = None,
+    shrink: float = 0.5,
+) -> GridResult:
+    """Brute force on a formulation: the best feasible point of an n^dim grid uniform
+    in its unit cube, then `refine` zoom levels, each a `refine_shape` grid on a window
+    centred on the best point so far (half-width two coarse cells, shrinking by
+    `shrink` per level, clipped to the box). Default `refine_shape`: 15 points a
+    coordinate, 61 along the stiffening one. The constraint is the largest normalised
+    one.
+
+    Why zoom, and why more points along the stiffening coordinate: with a constraint
+    active, the best grid point is the one that happens to lie closest to the constraint
+    surface, and the objective can change by several per cent per per cent of q0 there
+    (the default sizing problem), so a uniform grid's best is several per cent above the
+    true optimum whatever its n. The window moves with the best point, so it can follow
+    the constraint surface to a corner of the box."""
+    dimension = int(form.problem.lower.shape[0])
+    if refine_shape is None:
+        refine_shape = tuple(61 if k == form.stiffening else 15 for k in range(dimension))
+    shape = tuple(int(k) for k in refine_shape)
+    if int(n) < 2 or int(refine) < 0 or len(shape) != dimension or min(shape) < 2:
+        raise ValueError(
+            f"grid_search needs n >= 2, refine >= 0 and {dimension} refine_shape counts >= "
+            f"2; got n={n}, refine={refine}, refine_shape={refine_shape}"
+        )
+    if not 0.0 < shrink < 1.0:
+        raise ValueError(f"grid_search needs 0 < shrink < 1; got {shrink}")
+    dtype = form.problem.lower.dtype
+    zeros, ones = jnp.zeros(dimension, dtype), jnp.ones(dimension, dtype)
+    u, f, c = _evaluate_box(form, zeros, ones, (int(n),) * dimension)
+    coarse_u, coarse_f = u, f
+    evaluations = int(n) ** dimension
+    half = 2.0 / (int(n) - 1)
+    for _ in range(int(refine)):
+        if not np.isfinite(float(f)):
+            break
+        low, high = jnp.clip(u - half, 0.0, 1.0), jnp.clip(u + half, 0.0, 1.0)
+        u_new, f_new, c_new = _evaluate_box(form, low, high, shape)
+        evaluations += int(np.prod(shape))
+        if float(f_new) <= float(f):
+            u, f, c = u_new, f_new, c_new
+        half *= shrink
+    return GridResult(
+        x=form.design(form.problem, u),
+        objective=f,
+        constraint=c,
+        coarse_x=form.design(form.problem, coarse_u),
+        coarse_objective=coarse_f,
+        evaluations=evaluations,
+    )
 
 
 def grid_search(
@@ -51,44 +108,10 @@ def grid_search(
     refine_shape: tuple[int, int, int] = (15, 15, 61),
     shrink: float = 0.5,
 ) -> GridResult:
-    """Brute force: the best feasible point of an n^3 grid uniform in the log
-    coordinates of the box (all points x all cases in one jit(vmap) call); then `refine`
-    zoom levels, each a `refine_shape` grid on a window centred on the best point so far
-    (half-width two coarse cells, shrinking by `shrink` per level, clipped to the box).
-
-    Why zoom, and why more points along q0: with the deflection limit active the best
-    grid point is the one that happens to lie closest to the constraint surface, and the
-    crush changes by several per cent per per cent of q0 there (default problem), so a
-    uniform grid's best is several per cent above the true optimum whatever its n. The
-    window moves with the best point, so it can follow the constraint surface to a
-    corner of the box."""
-    shape = tuple(int(k) for k in refine_shape)
-    if int(n) < 2 or int(refine) < 0 or len(shape) != 3 or min(shape) < 2:
-        raise ValueError(
-            "grid_search needs n >= 2, refine >= 0 and three refine_shape counts >= 2; "
-            f"got n={n}, refine={refine}, refine_shape={refine_shape}"
-        )
-    if not 0.0 < shrink < 1.0:
-        raise ValueError(f"grid_search needs 0 < shrink < 1; got {shrink}")
-    dtype = problem.lower.dtype
-    u, f, c = _evaluate_box(problem, jnp.zeros(3, dtype), jnp.ones(3, dtype), (int(n),) * 3)
-    coarse_u, coarse_f = u, f
-    evaluations = int(n) ** 3
-    half = 2.0 / (int(n) - 1)
-    for _ in range(int(refine)):
-        if not np.isfinite(float(f)):
-            break
-        low, high = jnp.clip(u - half, 0.0, 1.0), jnp.clip(u + half, 0.0, 1.0)
-        u_new, f_new, c_new = _evaluate_box(problem, low, high, shape)
-        evaluations += int(np.prod(shape))
-        if float(f_new) <= float(f):
-            u, f, c = u_new, f_new, c_new
-        half *= shrink
-    return GridResult(
-        x=to_design(problem, u),
-        objective=f,
-        constraint=c,
-        coarse_x=to_design(problem, coarse_u),
-        coarse_objective=coarse_f,
-        evaluations=evaluations,
+    """`grid_minimise` of the sizing problem (an n^3 grid uniform in the log coordinates
+    of the box, all points x all cases in one jit(vmap) call, then zoomed in); the
+    constraint in metres, max_k W_k - W_max."""
+    grid = grid_minimise(
+        sizing_formulation(problem), n, refine=refine, refine_shape=refine_shape, shrink=shrink
     )
+    return eqx.tree_at(lambda g: g.constraint, grid, grid.constraint * problem.deflection_limit)

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 
 from ..scene import Barrier, Impact, Scene, Vehicle
 from ..simulate import simulate
+from .formulation import Formulation
 from .problem import SizingProblem, Vector
 
 
@@ -68,3 +69,17 @@ def rigid_wall_crush(problem: SizingProblem):
     """Mean crush M v^2 / (2 P0) against a rigid wall (m): the objective's scale."""
     c = problem.cases
     return jnp.mean(0.5 * c.mass * c.speed**2 / c.crush_force)
+
+
+def _measure(problem: SizingProblem, u):
+    """Mean crush, and each case's deflection over the limit minus one, at u."""
+    damage, deflection = responses(problem, to_design(problem, u))
+    return jnp.mean(damage), deflection / problem.deflection_limit - 1.0
+
+
+def sizing_formulation(problem: SizingProblem) -> Formulation:
+    """The sizing problem on the unit cube: mean crush over the rigid-wall crush, one
+    deflection constraint per case; q0 (the third coordinate) stiffens."""
+    return Formulation(
+        problem, rigid_wall_crush(problem), measure=_measure, design=to_design, stiffening=2
+    )

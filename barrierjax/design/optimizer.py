@@ -1,29 +1,34 @@
-r"""The gradient optimiser of the sizing problem: an augmented Lagrangian with projected
-optax.adam from many starts at once (`solve`), and the polish onto the constraint boundary
-(`polish`).
+r"""The gradient optimiser of the sizing problems: an augmented Lagrangian with projected
+optax.adam from many starts at once (`minimise`, and `solve` for a `SizingProblem`), and
+the polish onto the constraint boundary (`polish`). A problem reaches the optimiser as a
+`Formulation`: its objective and normalised constraints on the unit cube.
 
 Method (`solve`): the box is mapped to the unit cube in log coordinates, x = lo (hi/lo)^u,
 so each variable is scaled by its own range; iterates stay in the cube by projection
 (clipping after each optax.adam step), which also lets a variable settle exactly on a
 bound, as t and d do in the default problem (a sigmoid map would only approach it).
-The deflection constraints are handled by an augmented Lagrangian (Powell-Hestenes-
-Rockafellar for inequalities, one multiplier per case):
+The constraints are handled by an augmented Lagrangian (Powell-Hestenes-Rockafellar for
+inequalities, one multiplier per constraint):
 
     Phi(u) = f/f_ref + (1/(2 rho)) sum_k [max(0, lam_k + rho g_k)^2 - lam_k^2],
-    g_k = W_k / W_max - 1,   f_ref = mean M v^2 / (2 P0) (the rigid-wall crush),
+
+with each constraint normalised by its limit, g_k = value_k / limit_k - 1 (the sizing
+problem: the deflection W_k of case k over W_max), and f_ref the objective's scale (the
+sizing problem: the mean rigid-wall crush M v^2 / (2 P0)),
 
 minimised by `inner_steps` projected adam steps per outer iteration, then
 lam_k <- max(0, lam_k + rho g_k), rho x10 (capped at `rho_max`) when the violation has
 not fallen by 4, and the step size x `decay`. A start stops when the design moved less
 than `xtol` (in u) over an outer iteration with the violation below `feas_tol`, or after
 `max_outer` outer iterations. Its result is then polished to exact feasibility: a
-bisection along q0 (more backing strength, less deflection) onto the constraint boundary,
-keeping the feasible end (a feasible design with slack is likewise moved down in q0 onto
-the boundary when that lowers the crush). This is repeated for `rounds` rounds, each
+bisection along the formulation's `stiffening` coordinate (q0: more backing strength,
+less deflection) onto the constraint boundary, keeping the feasible end (a feasible design
+with slack is likewise moved down that coordinate onto the boundary when that lowers the
+objective). This is repeated for `rounds` rounds, each
 restarting from the last polished design with the step size x `round_factor`, keeping a
-start's best feasible design. The gradient is forward mode (`jax.jacfwd`, three design
-variables), which also compiles faster than reverse mode through the closed form's
-quadrature. 27 starts (a 3 x 3 x 3 pattern) run at once under `jax.vmap`; the best
+start's best feasible design. The gradient is forward mode (`jax.jacfwd`, two or three
+design variables), which also compiles faster than reverse mode through the closed form's
+quadrature. 3^n starts (a 3 x ... x 3 pattern) run at once under `jax.vmap`; the best
 feasible one wins. Starts where no vehicle yields the barrier and the constraint is
 inactive have a zero gradient and stop at once; the polish still moves them to the
 boundary, and the next round goes on from there.
@@ -36,14 +41,15 @@ import numpy as np
 import optax
 from jaxtyping import Array
 
-from .model import responses, rigid_wall_crush, to_design, to_unit
+from .formulation import Formulation
+from .model import sizing_formulation, to_design, to_unit
 from .problem import SizingProblem
 
 
 class _State(eqx.Module):
     u: Array  # design in the unit cube
     opt_state: optax.OptState
-    lam: Array  # multipliers, one per case
+    lam: Array  # multipliers, one per constraint
     rho: Array  # penalty parameter
     anchor: Array  # u at the last multiplier update
     violation: Array  # max(g, 0) at the last multiplier update
@@ -56,10 +62,12 @@ class _State(eqx.Module):
 class Solution(eqx.Module):
     """The gradient optimiser's result for every start (leading axis: start).
 
-    `x`: polished designs (t, d, q0); `objective`,
-    `constraint`: of the polished designs; `outer`: outer iterations; `converged`:
-    met the stopping test before `max_outer`; `feasible`: constraint <= 0; `best`: index
-    of the best feasible start (or of the least infeasible one if none is feasible)."""
+    `x`: polished designs; `objective`, `constraint`: of the polished designs (the
+    constraint in the problem's own terms: `solve` gives metres of deflection,
+    `minimise` the largest normalised constraint); `outer`: outer iterations;
+    `converged`: met the stopping test before `max_outer`; `feasible`: constraint <= 0;
+    `best`: index of the best feasible start (or of the least infeasible one if none is
+    feasible)."""
 
     x: Array
     objective: Array
@@ -70,38 +78,35 @@ class Solution(eqx.Module):
     best: Array
 
 
-def default_starts() -> Array:
-    """27 starts: the cell centres of a 3 x 3 x 3 partition of the unit cube (each
-    coordinate 1/6, 1/2 or 5/6)."""
+def default_starts(dimension: int = 3) -> Array:
+    """3^dimension starts: the cell centres of a 3 x ... x 3 partition of the unit cube
+    (each coordinate 1/6, 1/2 or 5/6)."""
     levels = np.array([1.0, 3.0, 5.0]) / 6.0
-    return jnp.asarray(
-        np.array(np.meshgrid(levels, levels, levels, indexing="ij")).reshape(3, -1).T
-    )
+    grid = np.meshgrid(*([levels] * int(dimension)), indexing="ij")
+    return jnp.asarray(np.array(grid).reshape(int(dimension), -1).T)
 
 
-def _merit(problem, u, lam, rho, scale):
-    """Augmented Lagrangian (PHR) of the scaled problem, and the scaled constraints."""
-    damage, deflection = responses(problem, to_design(problem, u))
-    g = deflection / problem.deflection_limit - 1.0
+def _merit(form: Formulation, u, lam, rho):
+    """Augmented Lagrangian (PHR) of the scaled problem, and the normalised constraints."""
+    f, g = form.measure(form.problem, u)
     penalty = jnp.sum(jnp.maximum(0.0, lam + rho * g) ** 2 - lam**2) / (2.0 * rho)
-    return jnp.mean(damage) / scale + penalty, g
+    return f / form.scale + penalty, g
 
 
 def _augmented_lagrangian(
-    problem, u0, *, learning_rate, inner_steps, max_outer, xtol, feas_tol, rho0, rho_max, decay
+    form, u0, *, learning_rate, inner_steps, max_outer, xtol, feas_tol, rho0, rho_max, decay
 ):
     """One start. A single flat loop with one gradient evaluation per pass (so the model
     is compiled once, forward and backward): `inner_steps` projected adam steps on the
     augmented Lagrangian, then, on the pass that would take the next step, the
     multiplier, penalty and step-size updates and the stopping test, from the
     constraint values that the same gradient evaluation returns."""
-    scale = rigid_wall_crush(problem)
     optimizer = optax.inject_hyperparams(optax.adam)(learning_rate=learning_rate)
     merit = jax.jacfwd(_merit, argnums=1, has_aux=True)
-    n_cases = problem.cases.mass.shape[0]
+    n_constraints = jax.eval_shape(lambda u: form.measure(form.problem, u)[1], u0).shape[0]
 
     def body(state):
-        grad, g = merit(problem, state.u, state.lam, state.rho, scale)
+        grad, g = merit(form, state.u, state.lam, state.rho)
         # Adam step (projected onto the unit cube).
         hyperparams = {**state.opt_state.hyperparams, "learning_rate": state.step_size}
         # optax's bias correction mixes its int32 step count with float64 moments, which
@@ -140,7 +145,7 @@ def _augmented_lagrangian(
     init = _State(
         u=u0,
         opt_state=optimizer.init(u0),
-        lam=jnp.zeros(n_cases, dtype),
+        lam=jnp.zeros(n_constraints, dtype),
         rho=jnp.asarray(rho0, dtype),
         anchor=u0,
         violation=jnp.asarray(jnp.inf, dtype),
@@ -152,21 +157,14 @@ def _augmented_lagrangian(
     return jax.lax.while_loop(cond, body, init)
 
 
-def _objective_and_constraint(problem, u):
-    damage, deflection = responses(problem, to_design(problem, u))
-    return jnp.mean(damage), jnp.max(deflection) - problem.deflection_limit
-
-
-def _polish(problem: SizingProblem, x):
-    """`polish`, also returning the objective and constraint of the result."""
-    u = jnp.clip(to_unit(problem, x), 0.0, 1.0)
-    stiff_q, stiff_all, soft_q = u.at[2].set(1.0), jnp.ones_like(u), u.at[2].set(0.0)
-    f, c = jax.vmap(lambda v: _objective_and_constraint(problem, v))(
-        jnp.stack([u, stiff_q, stiff_all, soft_q])
-    )
+def _polish(form: Formulation, u):
+    """`polish` in unit coordinates: (u, objective, largest normalised constraint)."""
+    axis = form.stiffening
+    stiff_q, stiff_all, soft_q = u.at[axis].set(1.0), jnp.ones_like(u), u.at[axis].set(0.0)
+    f, c = jax.vmap(form.evaluate)(jnp.stack([u, stiff_q, stiff_all, soft_q]))
     infeasible = c[0] > 0.0
-    # Infeasible: towards more backing strength (or the stiffest corner), onto the
-    # boundary. Feasible with slack: towards less backing strength, onto the boundary.
+    # Infeasible: stiffer along the axis (or the stiffest corner), onto the boundary.
+    # Feasible with slack: softer along the axis, onto the boundary.
     use_q = c[1] <= 0.0
     target = jnp.where(infeasible, jnp.where(use_q, stiff_q, stiff_all), soft_q)
     f_target = jnp.where(infeasible, jnp.where(use_q, f[1], f[2]), f[3])
@@ -180,7 +178,7 @@ def _polish(problem: SizingProblem, x):
     def body(_, carry):
         a, b, fa, ca = carry
         mid = 0.5 * (a + b)
-        f_mid, c_mid = _objective_and_constraint(problem, mid)
+        f_mid, c_mid = form.evaluate(mid)
         ok = c_mid <= 0.0
         return (
             jnp.where(ok, mid, a),
@@ -190,17 +188,13 @@ def _polish(problem: SizingProblem, x):
         )
 
     a, _, fa, ca = jax.lax.fori_loop(0, 52, body, (a, b, fa, ca))
-    # Feasible all the way down in q0: the constraint is not active along this line.
+    # Feasible all the way down the axis: the constraint is not active along this line.
     slack_line = ~infeasible & (c[3] <= 0.0)
     a = jnp.where(slack_line, soft_q, a)
     fa = jnp.where(slack_line, f[3], fa)
     ca = jnp.where(slack_line, c[3], ca)
     take = (ca <= 0.0) & (infeasible | (fa < f[0]))
-    return (
-        to_design(problem, jnp.where(take, a, u)),
-        jnp.where(take, fa, f[0]),
-        jnp.where(take, ca, c[0]),
-    )
+    return jnp.where(take, a, u), jnp.where(take, fa, f[0]), jnp.where(take, ca, c[0])
 
 
 def polish(problem: SizingProblem, x):
@@ -208,13 +202,14 @@ def polish(problem: SizingProblem, x):
     (or, if q0 alone cannot make it feasible, towards the stiffest corner of the box)
     onto the constraint boundary by bisection, and return the feasible end. If even
     the stiffest corner is infeasible, x is returned unchanged."""
-    return _polish(problem, x)[0]
+    u = jnp.clip(to_unit(problem, x), 0.0, 1.0)
+    return to_design(problem, _polish(sizing_formulation(problem), u)[0])
 
 
 @eqx.filter_jit
-def solve(
-    problem: SizingProblem,
-    starts=None,
+def minimise(
+    form: Formulation,
+    starts,
     *,
     learning_rate: float = 0.05,
     inner_steps: int = 100,
@@ -227,14 +222,14 @@ def solve(
     rounds: int = 2,
     round_factor: float = 0.1,
 ) -> Solution:
-    """Minimise the mean crush under the deflection limit from every start (points of
-    the unit cube, default `default_starts()`), by the augmented Lagrangian with
-    projected optax.adam described in the module docstring; polish each result onto the
-    feasible side of the constraint and pick the best feasible one."""
-    u0 = default_starts() if starts is None else jnp.asarray(starts)
-    u0 = jnp.clip(u0.astype(problem.lower.dtype), 0.0, 1.0)
+    """Minimise `form`'s objective under its constraints from every start (points of
+    the unit cube) by the augmented Lagrangian with projected optax.adam described in
+    the module docstring; polish each result onto the feasible side of the constraints
+    and pick the best feasible one. The `Solution`'s constraint is the largest
+    normalised one."""
+    u0 = jnp.clip(jnp.asarray(starts), 0.0, 1.0)
     run = lambda u, lr: _augmented_lagrangian(
-        problem,
+        form,
         u,
         learning_rate=lr,
         inner_steps=inner_steps,
@@ -247,17 +242,17 @@ def solve(
     )
 
     def round_(r, carry):
-        u, x, f, c, outer, converged = carry
+        u, best_u, f, c, outer, converged = carry
         lr = learning_rate * round_factor ** jnp.asarray(r, u.dtype)
         final = jax.vmap(run, in_axes=(0, None))(u, lr)
-        x_new, f_new, c_new = jax.vmap(lambda v: _polish(problem, v))(to_design(problem, final.u))
+        u_new, f_new, c_new = jax.vmap(lambda v: _polish(form, v))(final.u)
         better = jnp.where(c <= 0.0, (c_new <= 0.0) & (f_new < f), c_new < c)
         keep = lambda new, old: jnp.where(
             better.reshape(better.shape + (1,) * (new.ndim - 1)), new, old
         )
         return (
-            to_unit(problem, x_new),
-            keep(x_new, x),
+            u_new,
+            keep(u_new, best_u),
             keep(f_new, f),
             keep(c_new, c),
             outer + final.outer,
@@ -265,23 +260,27 @@ def solve(
         )
 
     inf = jnp.full(u0.shape[:1], jnp.inf, u0.dtype)
-    init = (
-        u0,
-        to_design(problem, u0),
-        inf,
-        inf,
-        jnp.zeros(u0.shape[:1], int),
-        jnp.zeros(u0.shape[:1], bool),
-    )
-    _, x, f, c, outer, converged = jax.lax.fori_loop(0, rounds, round_, init)
+    init = (u0, u0, inf, inf, jnp.zeros(u0.shape[:1], int), jnp.zeros(u0.shape[:1], bool))
+    _, u, f, c, outer, converged = jax.lax.fori_loop(0, rounds, round_, init)
     feasible = c <= 0.0
     best = jnp.where(jnp.any(feasible), jnp.argmin(jnp.where(feasible, f, jnp.inf)), jnp.argmin(c))
     return Solution(
-        x=x,
+        x=jax.vmap(lambda v: form.design(form.problem, v))(u),
         objective=f,
         constraint=c,
         outer=outer,
         converged=converged,
         feasible=feasible,
         best=best,
+    )
+
+
+def solve(problem: SizingProblem, starts=None, **options) -> Solution:
+    """Minimise the mean crush under the deflection limit (`minimise` of the sizing
+    problem's formulation, with its options) from every start (default
+    `default_starts()`); the constraint is returned in metres, max_k W_k - W_max."""
+    u0 = default_starts() if starts is None else jnp.asarray(starts)
+    solution = minimise(sizing_formulation(problem), u0.astype(problem.lower.dtype), **options)
+    return eqx.tree_at(
+        lambda s: s.constraint, solution, solution.constraint * problem.deflection_limit
     )
