@@ -39,6 +39,9 @@ def check(name: str, value, predicate, rule: str):
     array = np.asarray(value, dtype=float)
     with np.errstate(invalid="ignore"):
         ok = predicate(array)
+    if _is_traced(ok):  # a concrete value against a traced bound
+        checked = jnp.asarray(value, dtype=jnp.result_type(float))
+        return eqx.error_if(checked, ~jnp.all(ok), f"{name} must be {rule}")
     if not np.all(ok):
         raise _fail(name, rule, value, ok)
     return jnp.asarray(value, dtype=jnp.result_type(float))

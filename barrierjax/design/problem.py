@@ -44,7 +44,7 @@ Vector = Float[Array, " n"]
 KMH = 1.0 / 3.6
 
 
-def _bounds(name, value) -> Array:
+def bounds(name, value) -> Array:
     if np.asarray(value).size != 2:
         raise ValueError(f"{name} must be a pair (low, high); got {np.asarray(value).tolist()!r}")
     low, high = (float(v) for v in np.asarray(value, dtype=float).reshape(-1))
@@ -116,9 +116,9 @@ class SizingProblem(eqx.Module):
         self.section = SteelTube() if section is None else section
         if not isinstance(self.section, SteelTube):
             raise ValueError("SizingProblem.section must be a barrierjax.design.SteelTube")
-        self.thickness_bounds = _bounds("SizingProblem.thickness_bounds", thickness_bounds)
-        self.depth_bounds = _bounds("SizingProblem.depth_bounds", depth_bounds)
-        self.backing_bounds = _bounds("SizingProblem.backing_bounds", backing_bounds)
+        self.thickness_bounds = bounds("SizingProblem.thickness_bounds", thickness_bounds)
+        self.depth_bounds = bounds("SizingProblem.depth_bounds", depth_bounds)
+        self.backing_bounds = bounds("SizingProblem.backing_bounds", backing_bounds)
         t_high = float(self.thickness_bounds[1])
         if not 2.0 * t_high < float(self.section.width):
             raise ValueError(
