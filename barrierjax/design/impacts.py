@@ -108,9 +108,16 @@ class Lognormal:
         return [(name, value, fitted(q)) for name, value, q in self.published]
 
     def nodes(self, n: int) -> np.ndarray:
-        """`n` equally probable representative values: the quantiles at the midpoints
-        (k + 1/2)/n of n equal slices of probability (each carries weight 1/n)."""
-        return self.quantile((np.arange(n) + 0.5) / n)
+        """`n` equally probable representative values: the mean of X within each of n
+        slices of equal probability, E[X | q_k < X < q_k+1] with q_k the k/n quantile,
+        so that the nodes' average is the distribution's mean exactly (a midpoint
+        quantile per slice would miss the tail: -3 % of the Interstate mean at n = 32).
+        For ln X normal, E[X; a < Z < b] = e^(mu + sigma^2/2) (Phi(b - s) - Phi(a - s))."""
+        z = [_STANDARD.inv_cdf(k / n) for k in range(1, n)]
+        edges = np.array([-np.inf, *z, np.inf])
+        cdf = np.vectorize(_STANDARD.cdf)
+        share = np.diff(cdf(edges - self.sigma))
+        return self.mean * share * n
 
 
 def impact_severity(road_class: str = "Interstate") -> Lognormal:

@@ -126,7 +126,7 @@ class RobustSizing(eqx.Module):
         self.road_class = road_class
         self.impact_mass = jnp.asarray(self.impacts.mass)
         self.impact_speed = jnp.asarray(self.impacts.normal_speed)
-        self.test_mass = jnp.asarray([test.mass for test in tests])
+        self.test_mass = jnp.asarray([float(test.mass) for test in tests])
         self.test_speed = jnp.asarray([test.speed for test in tests])
         self.test_angle_deg = jnp.asarray([float(test.angle_deg) for test in tests])
         self.test_names = tuple(test.label for test in tests)
