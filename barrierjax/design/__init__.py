@@ -8,7 +8,7 @@ every crash test of a MASH level (`RobustSizing`, `optimize_robust`).
 """
 
 from .formulation import Formulation
-from .grid import GridResult, grid_minimise, grid_search
+from .grid import GridResult, grid_along_boundary, grid_minimise, grid_search
 from .model import (
     barrier,
     constraint,
@@ -19,7 +19,7 @@ from .model import (
     to_design,
     to_unit,
 )
-from .optimizer import Solution, default_starts, minimise, polish, solve
+from .optimizer import Solution, default_starts, minimise, polish, solve, to_boundary
 from .problem import ImpactCases, SizingProblem, default_cases
 from .report import DesignReport, optimize, optimize_default
 from .robust import (
@@ -56,6 +56,7 @@ __all__ = [
     "default_cases",
     "default_starts",
     "expected_damage",
+    "grid_along_boundary",
     "grid_minimise",
     "grid_search",
     "limits",
@@ -74,6 +75,7 @@ __all__ = [
     "robust_formulation",
     "sizing_formulation",
     "solve",
+    "to_boundary",
     "to_design",
     "to_unit",
 ]

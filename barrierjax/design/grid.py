@@ -14,6 +14,7 @@ from jaxtyping import Array
 
 from .formulation import Formulation
 from .model import sizing_formulation
+from .optimizer import BISECTION_STEPS, to_boundary
 from .problem import SizingProblem
 
 
@@ -115,3 +116,64 @@ def grid_search(
         sizing_formulation(problem), n, refine=refine, refine_shape=refine_shape, shrink=shrink
     )
     return eqx.tree_at(lambda g: g.constraint, grid, grid.constraint * problem.deflection_limit)
+
+
+@eqx.filter_jit
+def _boundary_points(form: Formulation, low, high, n: int):
+    """The best feasible point found by `to_boundary` from each point of an n^(dim-1)
+    grid spanning [low, high] in the other coordinates (the stiffening one at 1/2)."""
+    others = [k for k in range(low.shape[0]) if k != form.stiffening]
+    axes = [jnp.linspace(low[k], high[k], n) for k in others]
+    grid = jnp.stack(jnp.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(others))
+    u = jnp.full((grid.shape[0], low.shape[0]), 0.5, low.dtype).at[:, others].set(grid)
+    u, f, c = jax.vmap(lambda v: to_boundary(form, v))(u)
+    masked = jnp.where(c <= 0.0, f, jnp.inf)
+    k = jnp.argmin(masked)
+    return u[k], masked[k], c[k]
+
+
+def grid_along_boundary(
+    form: Formulation, n: int = 101, *, refine: int = 4, shrink: float = 0.5
+) -> GridResult:
+    """Brute force for a problem whose optimum lies on its constraints' boundary, as the
+    robust sizing's does (the softer the backing, the less the crush, until a crash test
+    deflects too far): the other coordinates on a uniform grid of n points each, and for
+    every grid point the boundary along the stiffening one, found by bisection
+    (`to_boundary`, to rounding); then `refine` zoom levels of n points a coordinate on a
+    window centred on the best so far (half-width two cells, shrinking by `shrink`).
+
+    Why not `grid_minimise`: a grid over the stiffening coordinate too is as good as its
+    point nearest the constraint surface, where the objective changes steeply; on the
+    robust TL-3 sizing, a 40 x 40 grid zoomed 8 times stayed 2 % above the optimum."""
+    if int(n) < 2 or int(refine) < 0 or not 0.0 < shrink < 1.0:
+        raise ValueError(
+            "grid_along_boundary needs n >= 2, refine >= 0 and 0 < shrink < 1; got "
+            f"n={n}, refine={refine}, shrink={shrink}"
+        )
+    dtype = form.problem.lower.dtype
+    dimension = int(form.problem.lower.shape[0])
+    low, high = jnp.zeros(dimension, dtype), jnp.ones(dimension, dtype)
+    u, f, c = _boundary_points(form, low, high, int(n))
+    coarse_u, coarse_f = u, f
+    lines = int(n) ** (dimension - 1)
+    per_line = 4 + BISECTION_STEPS
+    evaluations = lines * per_line
+    half = 2.0 / (int(n) - 1)
+    for _ in range(int(refine)):
+        if not np.isfinite(float(f)):
+            break
+        u_new, f_new, c_new = _boundary_points(
+            form, jnp.clip(u - half, 0.0, 1.0), jnp.clip(u + half, 0.0, 1.0), int(n)
+        )
+        evaluations += lines * per_line
+        if float(f_new) <= float(f):
+            u, f, c = u_new, f_new, c_new
+        half *= shrink
+    return GridResult(
+        x=form.design(form.problem, u),
+        objective=f,
+        constraint=c,
+        coarse_x=form.design(form.problem, coarse_u),
+        coarse_objective=coarse_f,
+        evaluations=evaluations,
+    )

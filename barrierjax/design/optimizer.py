@@ -157,8 +157,14 @@ def _augmented_lagrangian(
     return jax.lax.while_loop(cond, body, init)
 
 
-def _polish(form: Formulation, u):
-    """`polish` in unit coordinates: (u, objective, largest normalised constraint)."""
+# `to_boundary` evaluates the design and three ends of its line, then bisects this often
+# (the unit interval to 2^-52: rounding).
+BISECTION_STEPS = 52
+
+
+def to_boundary(form: Formulation, u):
+    """`polish` in unit coordinates, for any formulation: (u, objective, largest
+    normalised constraint) of the point reached along its `stiffening` coordinate."""
     axis = form.stiffening
     stiff_q, stiff_all, soft_q = u.at[axis].set(1.0), jnp.ones_like(u), u.at[axis].set(0.0)
     f, c = jax.vmap(form.evaluate)(jnp.stack([u, stiff_q, stiff_all, soft_q]))
@@ -187,7 +193,7 @@ def _polish(form: Formulation, u):
             jnp.where(ok, c_mid, ca),
         )
 
-    a, _, fa, ca = jax.lax.fori_loop(0, 52, body, (a, b, fa, ca))
+    a, _, fa, ca = jax.lax.fori_loop(0, BISECTION_STEPS, body, (a, b, fa, ca))
     # Feasible all the way down the axis: the constraint is not active along this line.
     slack_line = ~infeasible & (c[3] <= 0.0)
     a = jnp.where(slack_line, soft_q, a)
@@ -203,7 +209,7 @@ def polish(problem: SizingProblem, x):
     onto the constraint boundary by bisection, and return the feasible end. If even
     the stiffest corner is infeasible, x is returned unchanged."""
     u = jnp.clip(to_unit(problem, x), 0.0, 1.0)
-    return to_design(problem, _polish(sizing_formulation(problem), u)[0])
+    return to_design(problem, to_boundary(sizing_formulation(problem), u)[0])
 
 
 @eqx.filter_jit
@@ -245,7 +251,7 @@ def minimise(
         u, best_u, f, c, outer, converged = carry
         lr = learning_rate * round_factor ** jnp.asarray(r, u.dtype)
         final = jax.vmap(run, in_axes=(0, None))(u, lr)
-        u_new, f_new, c_new = jax.vmap(lambda v: _polish(form, v))(final.u)
+        u_new, f_new, c_new = jax.vmap(lambda v: to_boundary(form, v))(final.u)
         better = jnp.where(c <= 0.0, (c_new <= 0.0) & (f_new < f), c_new < c)
         keep = lambda new, old: jnp.where(
             better.reshape(better.shape + (1,) * (new.ndim - 1)), new, old

@@ -228,11 +228,11 @@ def robust_formulation(problem: RobustSizing) -> Formulation:
 __all__ = [
     "CRITERIA",
     "RobustSizing",
+    "crash_test_responses",
     "damages",
     "expected_damage",
     "limits",
     "margins",
     "rail_barrier",
     "robust_formulation",
-    "crash_test_responses",
 ]

@@ -1,6 +1,7 @@
 """The robust sizing's report: `optimize_robust` solves a `RobustSizing` by gradients
 (`minimise` of its formulation), checks the result against the brute-force grid
-(`grid_minimise`), evaluates a baseline barrier (the scene's) the same way, and returns a
+(`grid_along_boundary`: every wall thickness of a grid, the backing strength that puts
+the design on its constraints' boundary, by bisection), evaluates a baseline barrier (the scene's) the same way, and returns a
 `RobustReport` (`summary()`, `as_dict()`)."""
 
 import dataclasses
@@ -12,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..scene import Barrier
-from .grid import grid_minimise
+from .grid import grid_along_boundary
 from .optimizer import minimise
 from .robust import (
     CRITERIA,
@@ -159,7 +160,8 @@ class RobustReport:
         status = lambda p: "all criteria met" if p.feasible else "FAILS a criterion"
         lines += [
             f"  verdict: optimum {status(optimum)}; {self.baseline_name} {status(base)}",
-            f"Grid check ({self.grid_evaluations} designs, uniform then zoomed): best t "
+            f"Brute force ({self.grid_evaluations} designs: the boundary by bisection from "
+            "each point of a zoomed grid of t): best t "
             f"{1e3 * self.grid_t:.3f} mm, q0 {1e-3 * self.grid_q0:.3f} kN/m, expected crush "
             f"{1e3 * self.grid_objective:.4f} mm",
             f"  gradient optimum / grid's best - 1: {100 * self.relative_difference:+.4f} %",
@@ -181,12 +183,12 @@ def optimize_robust(
     baseline: Barrier,
     *,
     baseline_name: str = "baseline",
-    grid_n: int = 40,
+    grid_n: int = 101,
     progress=lambda message: None,
     **options,
 ) -> RobustReport:
     """Solve `problem` by gradients from `STARTS` (`minimise` with `options`, default
-    25 adam steps per outer iteration), check against `grid_minimise`, evaluate the
+    25 adam steps per outer iteration), check against `grid_along_boundary`, evaluate the
     `baseline` barrier, and report. `progress(message)` is told of each stage."""
     form = robust_formulation(problem)
     options = {"inner_steps": 25, **options}
@@ -194,7 +196,7 @@ def optimize_robust(
     progress("optimizing (compiling the model and its gradient, then about a minute)...")
     solution, time_solve = _timed(lambda: minimise(form, starts, **options))
     progress("checking against the brute-force grid...")
-    grid, time_grid = _timed(lambda: grid_minimise(form, grid_n))
+    grid, time_grid = _timed(lambda: grid_along_boundary(form, grid_n))
     k = int(solution.best)
     x = jnp.asarray(solution.x[k])
     t, q0 = (float(v) for v in x)
