@@ -9,7 +9,11 @@ chunks, the Parquet file; no plot), twice (the second with the compilation cache
 (2) the same number of scenarios as one `barrierjax.simulate` call on arrays after
 compilation (what a user writes by hand with vmap); (3) the same for 10^5 oblique impacts
 (angle 10-40 degrees); (4) the sweep's first call in a fresh process and its peak memory
-(one chunk of 65,536). Writes `sweep.json` to `--out`.
+(one chunk of 65,536); (5) 10^3 barrier-system impacts of `examples/mash_3_11.toml`
+(speed 90-110 km/h, angle 20-30 degrees, post spacing 1.7-2.1 m; chunks of 64) through the
+command once, against one vmapped `system_solver` call on 64 of them, and that chunk's first
+call and peak memory in a fresh process. `--system-only` runs (5) alone (about 15 min on 2
+cores). Writes `sweep.json` (`sweep_system.json`) to `--out`.
 """
 
 import subprocess
@@ -21,10 +25,15 @@ from pathlib import Path
 from harness import argument_parser, first_calls, table, write_json
 
 COMMAND = [sys.executable, "-c", "import sys; from barrierjax.cli import command; command()"]
+SYSTEM_SCENE = str(Path(__file__).resolve().parents[1] / "examples" / "mash_3_11.toml")
+SYSTEM_CHUNK = 64
 VARY = {
     "normal": ["--vary", "impact.speed=20 km/h:60 km/h", "--vary", "vehicle.mass=1000:2500"],
     "oblique": ["--vary", "impact.angle=10:40"],
-}
+    "system": [SYSTEM_SCENE, "--vary", "impact.speed=90 km/h:110 km/h", "--vary",
+               "impact.angle=20:30", "--vary", "barrier.post_spacing=1.7:2.1",
+               "--chunk", str(SYSTEM_CHUNK)],
+}  # fmt: skip
 
 
 def command_wall(kind, n, folder) -> float:
@@ -33,6 +42,56 @@ def command_wall(kind, n, folder) -> float:
     subprocess.run([*COMMAND, "sweep", *VARY[kind], "--samples", str(n), "--out", str(out),
                     "--no-plots"], check=True, capture_output=True)  # fmt: skip
     return time.perf_counter() - start
+
+
+_SYSTEM_SETUP = f"""
+    import numpy as np
+    from barrierjax.scene_file import read_toml
+    from barrierjax.system.scene import parse_system_scene
+    from barrierjax.system.sweep import system_solver
+    from barrierjax.sweep import parse_vary
+    from barrierjax.system.sweep import SWEEP_FIELDS
+    scene = parse_system_scene(read_toml({SYSTEM_SCENE!r}))
+    varies = [parse_vary(v, SWEEP_FIELDS) for v in ("impact.speed=90 km/h:110 km/h",
+              "impact.angle=20:30", "barrier.post_spacing=1.7:2.1")]
+    rows = np.random.default_rng(0).uniform([v.low for v in varies], [v.high for v in varies],
+                                            ({SYSTEM_CHUNK}, 3))
+    solve = system_solver(scene, varies)
+"""
+
+
+def direct_system() -> float:
+    """One vmapped `system_solver` call on a chunk of the system sweep, after compiling it."""
+    import textwrap
+
+    namespace = {}
+    exec(textwrap.dedent(_SYSTEM_SETUP), namespace)  # noqa: S102 - the benchmark's own code
+    solve, rows = namespace["solve"], namespace["rows"]
+    solve(rows)
+    start = time.perf_counter()
+    solve(rows)
+    return time.perf_counter() - start
+
+
+def system_main(args):
+    n = 128 if args.quick else 1000
+    with tempfile.TemporaryDirectory() as folder:
+        wall = command_wall("system", n, folder)
+    call = direct_system()
+    row = {"n": n, "command_s": wall, "us_sweep": 1e6 * wall / n,
+           "call_s": call, "us_call": 1e6 * call / SYSTEM_CHUNK,
+           "ratio": (wall / n) / (call / SYSTEM_CHUNK)}  # fmt: skip
+    table(
+        f"barrierjax sweep of barrier-system impacts (MASH 3-11 scene, chunks of "
+        f"{SYSTEM_CHUNK}) against one vmapped call on a chunk",
+        [row],
+        [("scenarios", "n", "d"), ("command s, first", "command_s", ".0f"),
+         ("us / scenario, sweep", "us_sweep", ".0f"), ("one chunk's call s", "call_s", ".1f"),
+         ("us / scenario, call", "us_call", ".0f"), ("sweep / call", "ratio", ".2f")],
+    )  # fmt: skip
+    first = first_calls({f"system sweep chunk ({SYSTEM_CHUNK} impacts)":
+                         (_SYSTEM_SETUP, "solve(rows)")})  # fmt: skip
+    write_json(args, "sweep_system", {"system": row, "first_call": first})
 
 
 def direct(kind, n) -> float:
@@ -68,7 +127,11 @@ def direct(kind, n) -> float:
 
 
 def main():
-    args = argument_parser(__doc__).parse_args()
+    parser = argument_parser(__doc__)
+    parser.add_argument("--system-only", action="store_true", help="run part (5) alone")
+    args = parser.parse_args()
+    if args.system_only:
+        return system_main(args)
     sizes = {"normal": 10**4, "oblique": 10**3} if args.quick else {"normal": 10**6,
                                                                     "oblique": 10**5}  # fmt: skip
     rows = []
@@ -98,6 +161,7 @@ def main():
     call = "run_sweep(default_scene(), Sweep(varies, 65536, 0), os.path.join(folder, 'r.parquet'))"
     first = first_calls({"sweep of one chunk (65,536 normal impacts)": (setup, call)})
     write_json(args, "sweep", {"sweeps": rows, "first_call": first})
+    system_main(args)
 
 
 if __name__ == "__main__":
