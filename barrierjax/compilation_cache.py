@@ -130,7 +130,8 @@ def _key(jitted, args, static) -> str | None:
     avals = [None if a is None else (a.shape, str(a.dtype), a.weak_type) for a in args]
     settings = [jax.config.jax_enable_x64, jax.config.jax_numpy_dtype_promotion,
                 jax.config.jax_default_matmul_precision, os.environ.get("XLA_FLAGS", ""),
-                str(jax.devices()[0]), _machine()]  # fmt: skip
+                str(jax.devices()[0]), jax.device_count(), jax.process_count(),
+                _machine()]  # fmt: skip
     versions = [metadata.version(name) for name in ("jax", "jaxlib", "equinox", "diffrax")]
     name = f"{jitted.__module__}.{jitted.__qualname__}"
     text = repr((name, options, avals, settings, versions, _source_digest()))

@@ -11,8 +11,9 @@ sweep is the same file whenever it runs. Each row of the result holds the varied
 (SI, named by their keys) and every scalar field of the `Result` (SI).
 
 Rows are solved in chunks (at most `chunk` rows, as equal as the count allows; each padded
-to one shape for the solve), sharded across every local device (`jax.sharding`: a
-multi-core or multi-GPU host splits each chunk's rows), each written to its own Parquet
+to one shape for the solve), sharded across every device (`jax.sharding`: a multi-core or
+multi-GPU host splits each chunk's rows, and so do the hosts of `jax.distributed`, whose
+process 0 writes the files), each written to its own Parquet
 file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are joined into
 `OUT` (Parquet, or CSV for a `.csv` name) and the folder removed. An interrupted sweep
 leaves its finished chunks: `resume=True` with the same sweep solves only the rest.
@@ -119,28 +120,48 @@ def result_columns(result: Result, n: int) -> dict[str, np.ndarray]:
     columns = {}
     for name in result.__dataclass_fields__:
         value = getattr(result, name)
-        if isinstance(value, jax.Array) and value.ndim <= 1:
+        if isinstance(value, jax.Array | np.ndarray) and value.ndim <= 1:
             columns[name] = np.broadcast_to(np.asarray(value), (n,))
     return columns
 
 
+def sharded_batch(fn: Callable) -> Callable:
+    """`fn` (rows -> a pytree of arrays, one value per row or one for all) compiled with
+    its rows sharded across every device of every process (`jax.sharding`; the processes
+    of `jax.distributed.initialize`, each holding every row and computing its devices'
+    share); returns a function of a NumPy array of rows, to NumPy arrays (the whole batch,
+    gathered to every process). One device: a plain jit. The row count must be a multiple
+    of the device count."""
+    devices = jax.devices()
+    if len(devices) == 1:
+        compiled = jax.jit(fn)
+        return lambda values: jax.tree.map(np.asarray, compiled(jnp.asarray(values)))
+    rows = NamedSharding(Mesh(np.array(devices), ("rows",)), PartitionSpec("rows"))
+    compiled = jax.jit(fn, in_shardings=rows)
+
+    def solve(values):
+        array = jax.make_array_from_callback(values.shape, rows, lambda index: values[index])
+        out = compiled(array)
+        if jax.process_count() == 1:
+            return jax.tree.map(np.asarray, out)
+        from jax.experimental import multihost_utils
+
+        return multihost_utils.process_allgather(out, tiled=True)
+
+    return solve
+
+
 def _solver(scene: Scene, varies: list[Vary]) -> Callable:
-    """The batch's solve, its rows sharded across every local device (one device: a plain
-    jit; `XLA_FLAGS=--xla_force_host_platform_device_count=N` emulates N on a CPU)."""
+    """The batch's solve (`sharded_batch`; `XLA_FLAGS=--xla_force_host_platform_device_count=N`
+    emulates N devices on a CPU)."""
     oblique = any(v.key == "impact.angle" for v in varies) or float(scene.impact.angle_deg) < 90
 
     def solve(values):
         batch = _with_values(scene, varies, values)
         return simulate(batch, n_history=0, oblique=True if oblique else None)
 
-    devices = jax.local_devices()
-    if len(devices) == 1:
-        solved = jax.jit(solve)
-    else:
-        rows = NamedSharding(Mesh(np.array(devices), ("rows",)), PartitionSpec("rows"))
-        sharded = jax.jit(solve, in_shardings=rows)
-        solved = lambda values: sharded(jax.device_put(values, rows))
-    return lambda values: result_columns(solved(jnp.asarray(values)), len(values))
+    solved = sharded_batch(solve)
+    return lambda values: result_columns(solved(values), len(values))
 
 
 @dataclass(frozen=True)
@@ -176,7 +197,9 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
     """Solve `sweep` of `scene` (a `Scene`, or a barrier-system scene,
     `system.scene.SystemScene`: its crash-test numbers, `system.design.crash_numbers`) into
     the file `out` (see the module docstring); returns its columns. `progress(n)` is called
-    with the rows of each finished chunk."""
+    with the rows of each finished chunk. Under `jax.distributed`, every process runs this
+    with the same arguments; each computes its devices' share of every chunk, process 0
+    writes the files and returns the columns, the others return {}."""
     out = Path(out)
     if sweep.samples < 1:
         raise SweepError(f"--samples must be a positive integer; got {sweep.samples}")
@@ -187,7 +210,9 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
     values = draw(sweep.varies, sweep.samples, sweep.seed, sweep.distribution)
     parts = parts_folder(out)
     manifest = sweep.manifest(scene)
-    _prepare(parts, out, manifest, resume)
+    lead = jax.process_index() == 0  # with jax.distributed, process 0 alone writes files
+    if lead:
+        _prepare(parts, out, manifest, resume)
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -201,26 +226,29 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
     # devices), each padded for the solve to one shape, a multiple of the device count.
     n_chunks = math.ceil(sweep.samples / sweep.chunk)
     size = math.ceil(sweep.samples / n_chunks)
-    devices = jax.local_device_count()
+    devices = jax.device_count()
     shape = devices * math.ceil(size / devices)
-    for index in range(n_chunks):
-        path = parts / f"part-{index:05d}.parquet"
+    paths = [parts / f"part-{index:05d}.parquet" for index in range(n_chunks)]
+    done = _agreed([lead and path.exists() for path in paths])
+    for index, path in enumerate(paths):
         rows = values[index * size : (index + 1) * size]
-        if path.exists():
+        if done[index]:
             if progress:
                 progress(len(rows))
             continue
         padded = np.concatenate([rows, np.repeat(rows[-1:], shape - len(rows), 0)])
         columns = solve(padded)
-        table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
-        table |= {name: column[: len(rows)] for name, column in columns.items()}
-        partial = path.with_suffix(".partial")
-        pq.write_table(pa.table(table), partial)
-        os.replace(partial, path)  # a chunk is there whole, or not at all
+        if lead:
+            table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
+            table |= {name: column[: len(rows)] for name, column in columns.items()}
+            partial = path.with_suffix(".partial")
+            pq.write_table(pa.table(table), partial)
+            os.replace(partial, path)  # a chunk is there whole, or not at all
         if progress:
             progress(len(rows))
-    joined = pa.concat_tables([pq.read_table(parts / f"part-{i:05d}.parquet")
-                               for i in range(n_chunks)])  # fmt: skip
+    if not lead:
+        return {}
+    joined = pa.concat_tables([pq.read_table(path) for path in paths])
     partial = out.with_name(out.name + ".partial")
     if out.suffix.lower() == ".csv":
         import pyarrow.csv
@@ -231,6 +259,16 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
     os.replace(partial, out)
     shutil.rmtree(parts)
     return {name: joined.column(name).to_numpy() for name in joined.column_names}
+
+
+def _agreed(flags: list[bool]) -> list[bool]:
+    """Process 0's `flags` in every process (`jax.distributed`): which chunks it already
+    holds, so that every process skips the same ones."""
+    if jax.process_count() == 1:
+        return flags
+    from jax.experimental import multihost_utils
+
+    return [bool(f) for f in multihost_utils.broadcast_one_to_all(np.array(flags, dtype=bool))]
 
 
 def _prepare(parts: Path, out: Path, manifest: dict, resume: bool):

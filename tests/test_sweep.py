@@ -133,6 +133,49 @@ def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
                                    rtol=1e-12, atol=0)  # fmt: skip
 
 
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("localhost", 0))
+        return s.getsockname()[1]
+
+
+def test_two_processes_of_jax_distributed_give_the_rows_of_one(tmp_path):
+    """Two processes joined by `jax.distributed` (gloo collectives between them on this
+    CPU), two emulated devices each: every chunk's rows sharded over the four devices of
+    both; process 0 alone writes the file, which equals this process's one-device sweep."""
+    import os
+    import subprocess
+    import sys
+
+    args = ["sweep", "--vary", "impact.speed=20 km/h:60 km/h", "--vary", "vehicle.mass=1000:2500",
+            "--samples", "100", "--chunk", "64", "--no-plots"]  # fmt: skip
+    two = tmp_path / "two.parquet"
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
+    code = ("import jax, sys; from barrierjax.cli import main; status = main(sys.argv[1:]); "
+            "assert jax.process_count() == 2 and jax.device_count() == 4; sys.exit(status)")  # fmt: skip
+    address = f"localhost:{_free_port()}"
+    processes = [
+        subprocess.Popen([sys.executable, "-c", code, *args, "--out", str(two), "--coordinator",
+                          address, "--processes", "2", "--process-id", str(i)], env=env,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for i in range(2)
+    ]  # fmt: skip
+    outputs = [p.communicate(timeout=300) for p in processes]
+    for p, (out, err) in zip(processes, outputs):
+        assert p.returncode == 0, err[-2000:]
+    # Process 0 sums up, alone (gloo prints its connections to stdout in both).
+    assert "scenarios in" in outputs[0][0] and "scenarios in" not in outputs[1][0]
+    one = tmp_path / "one.parquet"
+    assert main([*args, "--out", str(one)]) == 0
+    a, b = pq.read_table(two), pq.read_table(one)
+    assert a.column_names == b.column_names
+    for name in a.column_names:
+        np.testing.assert_allclose(a.column(name).to_numpy(), b.column(name).to_numpy(),
+                                   rtol=1e-12, atol=0)  # fmt: skip
+
+
 SYSTEM_SCENE = """test = "MASH 3-11"
 [vehicle]
 preset = "2270P"

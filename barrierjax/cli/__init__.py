@@ -10,6 +10,7 @@
                         [--json]
     barrierjax sweep [SCENE.toml] --vary KEY=LOW:HIGH [--vary ...] --samples N [--seed S]
                      [--distribution uniform|lhs|normal] --out FILE [--resume]
+                     [--coordinator HOST:PORT --processes N --process-id I]
 
 `run` solves a scene file (the built-in default scene without one; format in
 `barrierjax.scene_file`) with `barrierjax.simulate`, prints a summary (or one JSON object
@@ -247,6 +248,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "City Street", "all"),
                           help="the impact-severity distribution's road class (NCHRP Report "
                           "665 Table 78; default Interstate)")  # fmt: skip
+    optimize.add_argument("--test-model", default="normal", choices=("normal", "oblique"),
+                          help="the crash tests' model: report 3.2 on the normal component "
+                          "(default) or the oblique impact of 3.3")  # fmt: skip
     optimize.add_argument("--deflection-limit", default="0.6 m", metavar="LENGTH",
                           help="the largest deflection allowed in a crash test (the site's "
                           "limit; default '0.6 m')")  # fmt: skip
@@ -278,6 +282,12 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--chunk", type=int, default=65536, metavar="N",
                        help="scenarios solved at once (default 65536)")  # fmt: skip
     sweep.add_argument("--no-plots", action="store_true", help="do not write the plot")
+    sweep.add_argument("--coordinator", metavar="HOST:PORT",
+                       help="run as one of --processes processes (jax.distributed): the "
+                       "address of process 0; start the same command on every host")  # fmt: skip
+    sweep.add_argument("--processes", type=int, metavar="N", help="with --coordinator")
+    sweep.add_argument("--process-id", type=int, metavar="I",
+                       help="with --coordinator: this process, 0 to N-1 (0 writes the file)")  # fmt: skip
     return parser
 
 

@@ -44,6 +44,7 @@ def _robust_report(args):
             deflection_limit=limit,
             crush_per_mass=float(scene.vehicle.crush_force) / float(scene.vehicle.mass),
             road_class=args.road_class,
+            test_model=args.test_model,
         )
     except ValueError as error:
         raise CommandError(" ".join(str(error).split()), EXIT_USAGE) from None

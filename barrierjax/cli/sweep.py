@@ -52,6 +52,27 @@ def _plot(columns: dict, inputs: list[str], path: Path):
     plt.close(fig)
 
 
+def _distributed(args) -> bool:
+    """Join the processes of a multi-host sweep (`jax.distributed.initialize`) where
+    --coordinator is given; returns whether this process leads (writes the files)."""
+    options = (args.coordinator, args.processes, args.process_id)
+    if all(option is None for option in options):
+        return True
+    if any(option is None for option in options):
+        raise CommandError("--coordinator, --processes and --process-id go together", EXIT_USAGE)
+    if not 0 <= args.process_id < args.processes:
+        raise CommandError(
+            f"--process-id must be in 0..{args.processes - 1}; got {args.process_id}", EXIT_USAGE
+        )
+    import jax
+
+    # Collectives between CPU processes (the gather of each chunk) go through gloo; a
+    # GPU's go through NCCL whatever this says.
+    jax.config.update("jax_cpu_collectives_implementation", "gloo")
+    jax.distributed.initialize(args.coordinator, args.processes, args.process_id)
+    return args.process_id == 0
+
+
 def sweep_command(args) -> int:
     """`barrierjax sweep [SCENE.toml] --vary KEY=LOW:HIGH ... --samples N --out FILE`."""
     import time
@@ -61,6 +82,7 @@ def sweep_command(args) -> int:
     from .. import scene_file
     from ..sweep import Sweep, SweepError, parse_vary, parts_folder, run_sweep
 
+    lead = _distributed(args)
     fields = scene_file.FIELDS
     if args.scene is None:
         scene = scene_file.default_scene()
@@ -79,7 +101,7 @@ def sweep_command(args) -> int:
         sweep = Sweep(varies, args.samples, args.seed, args.distribution, args.chunk)
         start = time.perf_counter()
         with tqdm(total=args.samples, unit="scenario", unit_scale=True, file=None,
-                  desc="sweep", leave=False) as bar:  # fmt: skip
+                  desc="sweep", leave=False, disable=not lead) as bar:  # fmt: skip
             columns = run_sweep(scene, sweep, args.out, resume=args.resume, progress=bar.update)
         seconds = time.perf_counter() - start
     except SweepError as error:
@@ -90,6 +112,8 @@ def sweep_command(args) -> int:
             f"the same command with --resume carries on",
             130,
         ) from None
+    if not lead:  # process 0 of a jax.distributed sweep writes, sums up and plots
+        return EXIT_OK
     print(format_sweep_summary(columns, args.out, seconds))
     if not args.no_plots:
         path = args.out.with_suffix(".png")

@@ -5,9 +5,8 @@ resumption): the keys a sweep may vary and the batch's solve, one `vmap` of
 from collections.abc import Callable
 
 import jax
-import jax.numpy as jnp
-import numpy as np
 
+from ..sweep import sharded_batch
 from .barrier import stable_step
 from .design import crash_numbers, redesign
 from .scene import FIELDS, SystemScene
@@ -41,8 +40,7 @@ def system_solver(s: SystemScene, varies) -> Callable:
                              impact_point=value.get("impact.point", s.impact_point),
                              duration=s.duration, dt=dt, friction=s.friction)  # fmt: skip
 
-    batch = jax.jit(jax.vmap(one))
-    return lambda rows: {k: np.asarray(v) for k, v in batch(jnp.asarray(rows)).items()}
+    return sharded_batch(jax.vmap(one))
 
 
 def scene_numbers(s: SystemScene) -> list:

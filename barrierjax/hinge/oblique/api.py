@@ -14,7 +14,7 @@ from ...compilation_cache import stored_program
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
 from ..._solve.sensitivity import forward_jacobian_jvp
-from .results import MovingLoad, ObliqueImpact, build_history, finish
+from .results import MovingLoad, ObliqueImpact, build_history, finish, rigid_barrier
 from .transitions import (
     OVERTAKEN_MESSAGE,
     initial_carry,
@@ -119,7 +119,9 @@ def oblique_impact(
     **Arguments:**
 
     - `mass_ratio`: mu = M / (m L), positive.
-    - `force_ratio`: phi = P0 / P_b, above 1 (at or below 1 the barrier never yields).
+    - `force_ratio`: phi = P0 / P_b, positive; at or below 1 the barrier never yields and
+      the vehicle crushes against it as against a rigid wall (`results.rigid_barrier`,
+      in closed form; the step loop runs those lanes at phi = 2 and discards them).
     - `normal_speed`, `tangential_speed`: the vehicle's impact velocity components over
       L / t0; the normal one positive, the tangential one non-negative (zero is the
       normal impact of 3.2).
@@ -141,11 +143,13 @@ def oblique_impact(
     _check_options(rtol, max_steps)
     n_history = _checks.history_samples(n_history)
     mu = _checks.positive("mass_ratio", mass_ratio)
-    phi = _force_ratio(force_ratio)
+    phi = _checks.positive("force_ratio", force_ratio)
     vn = _checks.positive("normal_speed", normal_speed)
     vh = _checks.non_negative("tangential_speed", tangential_speed)
     friction = _checks.non_negative("friction", friction)
-    args = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
+    yields = phi > 1.0
+    safe_phi = jnp.where(yields, phi, 2.0)  # keeps the discarded lanes finite
+    args = jnp.broadcast_arrays(mu, safe_phi, vn, vh, friction)
     rtol = _tolerance(rtol, args[0].dtype)
     flat = args[0].ndim > 0
     inputs = tuple(a.ravel() for a in args) if flat else args
@@ -155,9 +159,17 @@ def oblique_impact(
         return _oblique_solved(*inputs, rtol, **options)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
-    if not flat:
-        return result
-    return jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), result)
+    if flat:
+        result = jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), result)
+    mu, phi, vn, vh, friction = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
+    rigid = rigid_barrier(mu, phi, vn, vh, friction, n_history=n_history, n_x=_N_X)
+    yields = jnp.broadcast_to(yields, mu.shape)
+
+    def choose(solved, closed_form):
+        mask = yields.reshape(yields.shape + (1,) * (solved.ndim - yields.ndim))
+        return jnp.where(mask, solved, closed_form.astype(solved.dtype))
+
+    return jax.tree.map(choose, result, rigid)
 
 
 def _of_lane(carry: Carry, lane) -> Carry:

@@ -252,3 +252,73 @@ def finish(solution: Solution, *, n_history, n_x) -> tuple[ObliqueImpact, Outcom
         steps=recording.count,
         history=history,
     ), outcome_of(solution)
+
+
+def rigid_barrier(mu, phi, vn, vh, friction, *, n_history, n_x) -> ObliqueImpact:
+    """phi <= 1: the barrier never yields, and the vehicle crushes against it as against a
+    rigid wall, at P0 (phi) until its normal speed is spent, at T* = mu V_N / phi, sliding
+    meanwhile under the friction force friction phi (its slide stopped where V_H runs
+    out first); then it moves on along the barrier at what is left of V_H, with no force
+    between them (exit angle 0). D = mu V_N^2 / (2 phi); the friction takes the rest of
+    the tangential kinetic energy lost. Histories from contact to T*; the barrier's are
+    zero."""
+    t_star = mu * vn / phi
+    slide = friction * phi / mu  # the tangential deceleration while sliding
+    vh_end = jnp.maximum(vh - slide * t_star, 0.0)
+    zero = jnp.zeros_like(t_star)
+    history = None
+    if n_history:
+        t = t_star[..., None] * jnp.linspace(0.0, 1.0, n_history)
+        vn_, vh_, sl = vn[..., None], vh[..., None], slide[..., None]
+        t_slide = jnp.where(sl > 0.0, vh_ / jnp.where(sl > 0.0, sl, 1.0), jnp.inf)
+        sliding = jnp.minimum(t, t_slide)
+        along = vh_ * sliding - 0.5 * sl * sliding**2
+        normal = vn_ * t - 0.5 * (phi / mu)[..., None] * t**2
+        v_normal, v_along = vn_ - (phi / mu)[..., None] * t, jnp.maximum(vh_ - sl * t, 0.0)
+        zeros = jnp.zeros_like(t)
+        history = ObliqueImpactHistory(
+            time=t,
+            vehicle_velocity=v_normal,
+            vehicle_tangential_velocity=v_along,
+            vehicle_position=along,
+            vehicle_displacement=normal,
+            barrier_velocity=zeros,
+            barrier_displacement=zeros,
+            contact_force=jnp.zeros_like(t) + phi[..., None],
+            crush=normal,
+            hinge_position=zeros,
+            rear_hinge_position=zeros,
+            backing_work=zeros,
+            hinge_work=zeros,
+            friction_work=0.5 * mu[..., None] * (vh_**2 - v_along**2),
+            slope_work=zeros,
+            string_work=zeros,
+            beam_kinetic_energy=zeros,
+            vehicle_kinetic_energy=0.5 * mu[..., None] * (v_normal**2 + v_along**2),
+            contact_position=along,
+            slope=zeros,
+            x=along[..., -1:] * jnp.linspace(0.0, 1.0, n_x),
+            deflected_shape=jnp.zeros(t.shape + (n_x,), t.dtype),
+        )
+    return ObliqueImpact(
+        damage=0.5 * mu * vn**2 / phi,
+        duration=t_star,
+        max_deflection=zero,
+        barrier_displacement=zero,
+        hinge_position=zero,
+        rear_hinge_position=zero,
+        exit_speed=vh_end,
+        exit_angle_deg=zero,
+        crush_work=0.5 * mu * vn**2,
+        backing_work=zero,
+        hinge_work=zero,
+        friction_work=0.5 * mu * (vh**2 - vh_end**2),
+        slope_work=zero,
+        string_work=zero,
+        t_star=t_star,
+        exit_normal_speed=zero,
+        exit_tangential_speed=vh_end,
+        separated=jnp.ones_like(t_star),
+        steps=jnp.zeros(t_star.shape, int),
+        history=history,
+    )
