@@ -89,10 +89,7 @@ def test_max_deflection_is_the_peak_of_the_final_shape(oblique_batch):
         # The history's last sample is the last recorded step's shape, on its own grid.
         on_grid = displacement_field(samples, count, r.history.x[i])[-1]
         np.testing.assert_allclose(
-            r.history.deflected_shape[i, -1],
-            on_grid,
-            rtol=1e-9,
-            atol=1e-12 * float(jnp.max(on_grid)),
+            r.history.deflected_shape[i, -1], on_grid, rtol=1e-9, atol=1e-12 * float(jnp.max(on_grid))
         )
 
 
@@ -177,13 +174,7 @@ def test_force_ratio_near_one_starts_and_closes_the_energy_balance(friction):
 def test_vmap_equals_loop(oblique_batch):
     for i, case in enumerate(OBLIQUE_CASES[:2]):
         single = oblique_impact(*case, rtol=1e-9)
-        for field in (
-            "damage",
-            "barrier_displacement",
-            "duration",
-            "exit_angle_deg",
-            "exit_normal_speed",
-        ):
+        for field in ("damage", "barrier_displacement", "duration", "exit_angle_deg", "exit_normal_speed"):
             assert float(getattr(oblique_batch, field)[i]) == pytest.approx(
                 float(getattr(single, field)), rel=1e-9, abs=1e-14
             )
@@ -211,9 +202,7 @@ def test_batched_gradient_equals_the_loop_of_scalar_gradients():
         # (Unpacked from an array, as the finite-difference tests below pass them: they
         # then share the scalar gradient's compilation.)
         loop = np.array(gradient(*jnp.array(case)))
-        np.testing.assert_allclose(
-            row, loop, rtol=_GRADIENT_ROUNDING, atol=1e-12 * np.max(np.abs(loop))
-        )
+        np.testing.assert_allclose(row, loop, rtol=_GRADIENT_ROUNDING, atol=1e-12 * np.max(np.abs(loop)))
 
 
 # The rounding floor of these gradients at rtol 1e-11: moving the mass ratio of the last
@@ -226,13 +215,7 @@ _GRADIENT_ROUNDING = 5e-8
 def _jacobian_against_finite_differences(
     x,
     tolerance,
-    fields=(
-        "exit_angle_deg",
-        "exit_tangential_speed",
-        "damage",
-        "barrier_displacement",
-        "duration",
-    ),
+    fields=("exit_angle_deg", "exit_tangential_speed", "damage", "barrier_displacement", "duration"),
     inputs=range(5),
 ):
     def outputs(x):
@@ -283,9 +266,7 @@ def test_gradients_match_finite_differences_where_friction_stops_the_slide_in_co
     # mu were 3e-4 to 7e-4 off, with respect to V_H and f 0.8 to 17 times their size); it
     # is an event now.
     x = jnp.array([0.333, 7.49, 0.300, 0.0816, 0.326])
-    _jacobian_against_finite_differences(
-        x, 1e-5, fields=("damage", "barrier_displacement", "duration")
-    )
+    _jacobian_against_finite_differences(x, 1e-5, fields=("damage", "barrier_displacement", "duration"))
 
 
 def test_gradients_match_finite_differences_where_friction_stops_the_slide_while_crushing():
