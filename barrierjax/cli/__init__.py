@@ -248,9 +248,6 @@ def build_parser() -> argparse.ArgumentParser:
                                    "City Street", "all"),
                           help="the impact-severity distribution's road class (NCHRP Report "
                           "665 Table 78; default Interstate)")  # fmt: skip
-    optimize.add_argument("--test-model", default="normal", choices=("normal", "oblique"),
-                          help="the crash tests' model: report 3.2 on the normal component "
-                          "(default) or the oblique impact of 3.3")  # fmt: skip
     optimize.add_argument("--deflection-limit", default="0.6 m", metavar="LENGTH",
                           help="the largest deflection allowed in a crash test (the site's "
                           "limit; default '0.6 m')")  # fmt: skip

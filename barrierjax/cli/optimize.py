@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 
-from .output import EXIT_OK, EXIT_USAGE, CommandError, progress
+from .output import EXIT_FAILED, EXIT_OK, EXIT_USAGE, CommandError, progress
 
 __all__ = ["optimize_command"]
 
@@ -44,11 +44,18 @@ def _robust_report(args):
             deflection_limit=limit,
             crush_per_mass=float(scene.vehicle.crush_force) / float(scene.vehicle.mass),
             road_class=args.road_class,
-            test_model=args.test_model,
         )
     except ValueError as error:
         raise CommandError(" ".join(str(error).split()), EXIT_USAGE) from None
-    return optimize_robust(problem, scene.barrier, baseline_name=name, progress=progress)
+    import equinox as eqx
+    import jax
+
+    try:
+        return optimize_robust(problem, scene.barrier, baseline_name=name, progress=progress)
+    except (jax.errors.JaxRuntimeError, eqx.EquinoxRuntimeError) as error:  # a model's check
+        from .run import model_error
+
+        raise CommandError(model_error(error), EXIT_FAILED) from None
 
 
 def optimize_command(args) -> int:
@@ -59,8 +66,16 @@ def optimize_command(args) -> int:
                 "optimize: a scene is sized for a test level: pass --level (e.g. MASH-TL3)",
                 EXIT_USAGE,
             )
-        from ..design import optimize_default
+        import importlib
 
+        optimize_default = getattr(
+            importlib.import_module("barrierjax.design"), "optimize_default", None
+        )
+        if optimize_default is None:
+            raise CommandError(
+                "optimize: barrierjax.design.optimize_default is not available in this version",
+                EXIT_FAILED,
+            )
         progress("optimizing the default design (compiling the model and its gradient)...")
         report = optimize_default()
     else:

@@ -210,8 +210,11 @@ def format_summary(data: dict) -> str:
     return "\n".join(lines)
 
 
-def _model_error(error: Exception) -> str:
-    """The message a model raised at run time, without the traceback XLA wraps it in."""
+def model_error(error: Exception) -> str:
+    """The message a model raised at run time, without the traceback XLA wraps it in (or
+    the advice that equinox's own jit adds below it)."""
+    if type(error).__name__ == "EquinoxRuntimeError":
+        return str(error).strip().splitlines()[0]
     marker = "_EquinoxRuntimeError: "
     lines = [line for line in str(error).splitlines() if marker in line]
     return lines[-1].split(marker, 1)[1].strip() if lines else " ".join(str(error).split())
@@ -257,7 +260,7 @@ def run_command(args) -> int:
             result = simulate(scene)
             jax.block_until_ready(result)
     except jax.errors.JaxRuntimeError as error:  # a model's run-time check (equinox.error_if)
-        raise CommandError(_model_error(error), EXIT_FAILED) from None
+        raise CommandError(model_error(error), EXIT_FAILED) from None
     except (NotImplementedError, ValueError) as error:
         raise _scene_error(error) from None
     data = result_dict(scene, result, name)

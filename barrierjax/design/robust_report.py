@@ -86,7 +86,7 @@ class RobustReport:
     `mass_per_length` (kg/m), `compact`; `optimum` and `baseline` (`Performance`); the
     grid: `grid_t`, `grid_q0`, `grid_objective`, `grid_evaluations`,
     `relative_difference` = objective / grid objective - 1; the problem: `level`,
-    `road_class`, `test_model`, `deflection_limit`, `impacts` (how many), `baseline_name`; solver:
+    `road_class`, `deflection_limit`, `impacts` (how many), `baseline_name`; solver:
     `outer_iterations`, `converged`, `starts`; wall times (s, first calls, compilation
     included): `time_optimize_s`, `time_grid_s`."""
 
@@ -106,7 +106,6 @@ class RobustReport:
     relative_difference: float
     level: str
     road_class: str
-    test_model: str
     deflection_limit: float
     impacts: int
     outer_iterations: int
@@ -132,7 +131,7 @@ class RobustReport:
         optimum, base = self.optimum, self.baseline
         lines = [
             f"Robust barrier sizing for {self.level}: tube rail on a crushable backing "
-            f"(report 3.2; crash tests by {self.test_model})",
+            "(report 3.2)",
             f"Objective: expected vehicle crush over {self.impacts} real-world impacts "
             f"({self.road_class}, NCHRP Report 665 impact severity x US fleet mass)",
             f"Design (gradients: augmented Lagrangian + projected optax.adam, "
@@ -223,9 +222,6 @@ def optimize_robust(
         else math.nan,
         level=problem.level,
         road_class=problem.road_class,
-        test_model={"normal": "3.2, normal component", "oblique": "3.3, oblique"}[
-            problem.test_model
-        ],
         deflection_limit=float(problem.deflection_limit),
         impacts=int(problem.impact_mass.shape[0]),
         outer_iterations=int(solution.outer[k]),
