@@ -76,18 +76,35 @@ def grid_minimise(
         )
     if not 0.0 < shrink < 1.0:
         raise ValueError(f"grid_search needs 0 < shrink < 1; got {shrink}")
+    return _zoomed(
+        form,
+        lambda low, high, first: _evaluate_box(
+            form, low, high, (int(n),) * dimension if first else shape
+        ),
+        first_count=int(n) ** dimension,
+        count=int(np.prod(shape)),
+        half=2.0 / (int(n) - 1),
+        refine=int(refine),
+        shrink=shrink,
+    )
+
+
+def _zoomed(form, search, *, first_count, count, half, refine, shrink) -> GridResult:
+    """`search(low, high, first)` (the best feasible (u, objective, constraint) of a
+    window of the unit cube) on the whole cube, then on `refine` windows centred on the
+    best so far, of half-width `half` shrinking by `shrink`; `first_count` and `count`
+    designs evaluated by the first search and each later one."""
+    dimension = int(form.problem.lower.shape[0])
     dtype = form.problem.lower.dtype
-    zeros, ones = jnp.zeros(dimension, dtype), jnp.ones(dimension, dtype)
-    u, f, c = _evaluate_box(form, zeros, ones, (int(n),) * dimension)
+    u, f, c = search(jnp.zeros(dimension, dtype), jnp.ones(dimension, dtype), True)
     coarse_u, coarse_f = u, f
-    evaluations = int(n) ** dimension
-    half = 2.0 / (int(n) - 1)
-    for _ in range(int(refine)):
+    evaluations = first_count
+    for _ in range(refine):
         if not np.isfinite(float(f)):
             break
         low, high = jnp.clip(u - half, 0.0, 1.0), jnp.clip(u + half, 0.0, 1.0)
-        u_new, f_new, c_new = _evaluate_box(form, low, high, shape)
-        evaluations += int(np.prod(shape))
+        u_new, f_new, c_new = search(low, high, False)
+        evaluations += count
         if float(f_new) <= float(f):
             u, f, c = u_new, f_new, c_new
         half *= shrink
@@ -150,30 +167,14 @@ def grid_along_boundary(
             "grid_along_boundary needs n >= 2, refine >= 0 and 0 < shrink < 1; got "
             f"n={n}, refine={refine}, shrink={shrink}"
         )
-    dtype = form.problem.lower.dtype
-    dimension = int(form.problem.lower.shape[0])
-    low, high = jnp.zeros(dimension, dtype), jnp.ones(dimension, dtype)
-    u, f, c = _boundary_points(form, low, high, int(n))
-    coarse_u, coarse_f = u, f
-    lines = int(n) ** (dimension - 1)
-    per_line = 4 + BISECTION_STEPS
-    evaluations = lines * per_line
-    half = 2.0 / (int(n) - 1)
-    for _ in range(int(refine)):
-        if not np.isfinite(float(f)):
-            break
-        u_new, f_new, c_new = _boundary_points(
-            form, jnp.clip(u - half, 0.0, 1.0), jnp.clip(u + half, 0.0, 1.0), int(n)
-        )
-        evaluations += lines * per_line
-        if float(f_new) <= float(f):
-            u, f, c = u_new, f_new, c_new
-        half *= shrink
-    return GridResult(
-        x=form.design(form.problem, u),
-        objective=f,
-        constraint=c,
-        coarse_x=form.design(form.problem, coarse_u),
-        coarse_objective=coarse_f,
-        evaluations=evaluations,
+    lines = int(n) ** (int(form.problem.lower.shape[0]) - 1)
+    per_line = 4 + BISECTION_STEPS  # the design, three ends of its line, the bisection
+    return _zoomed(
+        form,
+        lambda low, high, first: _boundary_points(form, low, high, int(n)),
+        first_count=lines * per_line,
+        count=lines * per_line,
+        half=2.0 / (int(n) - 1),
+        refine=int(refine),
+        shrink=shrink,
     )

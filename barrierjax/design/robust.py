@@ -23,17 +23,16 @@ The problem (`RobustSizing`; report 3.2 physics by `barrierjax.simulate`):
   3.3: near phi = 1 (a test vehicle that barely yields the barrier, which the optimiser
   and the brute force pass through) its crushing phase takes steps in proportion to
   1 / (phi - 1), and under their jit the step budget cannot grow: tried, a budget of
-  16384 steps was spent. The occupant risk is
-  `barrierjax.assess.assess` of that motion on the vehicle's axes (the vehicle does not
-  turn); the limits are MASH 2016's maxima (criteria H and I). The deflection limit
+  16384 steps was spent. The occupant risk is `barrierjax.assess.assess` of that motion
+  on the vehicle's axes (the vehicle does not turn); the limits are MASH 2016's maxima (criteria H and I). The deflection limit
   W_max is the designer's (the site's), not MASH's: MASH reports the working width
   without limiting it. MASH's exit box and the vehicle's stability (criteria D, F) need
   a vehicle that yaws and rolls: not judged here (see `barrierjax.system`).
 
 Why these criteria bind as they do: a rigid-plastic vehicle that crushes at a force
 proportional to its mass decelerates at most at P0/M (20.2 g for the default scene's
-198 m/s^2), so the ORA limit of 20.49 g holds for every design, with a margin of 1.4 %
-at most; the lateral OIV cannot exceed the normal impact speed, 11.7 m/s at 100 km/h
+198 m/s^2), so with the default scene's vehicles the ORA limit of 20.49 g holds for every
+design, by 1.4 % at least; the lateral OIV cannot exceed the normal impact speed, 11.7 m/s at 100 km/h
 and 25 degrees, below 12.2 m/s. The deflection of the heavier test vehicle is what
 binds, as in the deterministic problem of `barrierjax.design.problem`.
 """
