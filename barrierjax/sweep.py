@@ -30,12 +30,11 @@ from pathlib import Path
 
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 import numpy as np
-from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from .scene import Scene
 from .scene_file import FIELDS, Field, SceneFileError, parse_quantity
+from .sharding import sharded_batch
 from .simulate import Result, simulate
 
 DISTRIBUTIONS = ("uniform", "lhs", "normal")
@@ -123,32 +122,6 @@ def result_columns(result: Result, n: int) -> dict[str, np.ndarray]:
         if isinstance(value, jax.Array | np.ndarray) and value.ndim <= 1:
             columns[name] = np.broadcast_to(np.asarray(value), (n,))
     return columns
-
-
-def sharded_batch(fn: Callable) -> Callable:
-    """`fn` (rows -> a pytree of arrays, one value per row or one for all) compiled with
-    its rows sharded across every device of every process (`jax.sharding`; the processes
-    of `jax.distributed.initialize`, each holding every row and computing its devices'
-    share); returns a function of a NumPy array of rows, to NumPy arrays (the whole batch,
-    gathered to every process). One device: a plain jit. The row count must be a multiple
-    of the device count."""
-    devices = jax.devices()
-    if len(devices) == 1:
-        compiled = jax.jit(fn)
-        return lambda values: jax.tree.map(np.asarray, compiled(jnp.asarray(values)))
-    rows = NamedSharding(Mesh(np.array(devices), ("rows",)), PartitionSpec("rows"))
-    compiled = jax.jit(fn, in_shardings=rows)
-
-    def solve(values):
-        array = jax.make_array_from_callback(values.shape, rows, lambda index: values[index])
-        out = compiled(array)
-        if jax.process_count() == 1:
-            return jax.tree.map(np.asarray, out)
-        from jax.experimental import multihost_utils
-
-        return multihost_utils.process_allgather(out, tiled=True)
-
-    return solve
 
 
 def _solver(scene: Scene, varies: list[Vary]) -> Callable:

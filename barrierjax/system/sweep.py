@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import jax
 
-from ..sweep import sharded_batch
+from ..sharding import sharded_batch
 from .barrier import stable_step
 from .design import crash_numbers, redesign
 from .scene import FIELDS, SystemScene
