@@ -26,7 +26,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from barrierjax.design import RobustSizing, damages, optimize_robust, rail_barrier, robust_formulation
+from barrierjax.design import (
+    RobustSizing,
+    damages,
+    optimize_robust,
+    rail_barrier,
+    robust_formulation,
+)
 from barrierjax.scene_file import default_scene
 
 
@@ -54,7 +60,7 @@ def main(out="size_barrier_tl3.png"):
     left.contour(t_mm, q0_kn, worst, levels=[0.0], colors="white", linewidths=2)
     left.contourf(t_mm, q0_kn, worst, levels=[worst.min(), 0.0], colors="none", hatches=["//"])
     left.plot(1e3 * report.t, 1e-3 * report.q0, "r*", ms=16, label="gradient optimum")
-    left.plot(1e3 * report.grid_t, 1e-3 * report.grid_q0, "wo", mfc="none", ms=12,
+    left.plot(1e3 * report.grid_t, 1e-3 * report.grid_q0, "o", mec="orange", mfc="none", ms=13, mew=2,
               label="brute force's best")  # fmt: skip
     tube_t = 6.35  # the default scene's HSS 203x152x6.4 (barrierjax/default_scene.toml)
     left.plot(tube_t, float(scene.barrier.backing_strength) * 1e-3, "ks", ms=9,
