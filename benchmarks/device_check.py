@@ -22,9 +22,9 @@ jax.config.update("jax_enable_x64", True)
 from harness import argument_parser, table, write_json
 
 
-def timed(fn):
+def timed(fn, *args):
     start = time.perf_counter()
-    out = jax.block_until_ready(fn())
+    out = jax.block_until_ready(fn(*args))
     return out, time.perf_counter() - start
 
 
@@ -46,8 +46,8 @@ def sweeps() -> list[dict]:
     for kind, (n, varies) in cases.items():
         sweep = Sweep([parse_vary(v) for v in varies], n, 0)
         with tempfile.TemporaryDirectory() as folder:
-            _, first = timed(lambda: run_sweep(s, sweep, Path(folder) / "a.parquet"))
-            _, again = timed(lambda: run_sweep(s, sweep, Path(folder) / "b.parquet"))
+            _, first = timed(run_sweep, s, sweep, Path(folder) / "a.parquet")
+            _, again = timed(run_sweep, s, sweep, Path(folder) / "b.parquet")
         if kind == "normal":
             speed, mass = rng.uniform(20 / 3.6, 60 / 3.6, n), rng.uniform(1000, 2500, n)
             scene = Scene(s.barrier, Vehicle(jnp.asarray(mass), s.vehicle.crush_force),
@@ -58,8 +58,8 @@ def sweeps() -> list[dict]:
             scene = Scene(s.barrier, s.vehicle, Impact(s.impact.speed, angle))
             options = {"oblique": True}
         run = jax.jit(lambda sc, o=options: simulate(sc, n_history=0, **o))
-        timed(lambda: run(scene))
-        _, call = timed(lambda: run(scene))
+        timed(run, scene)
+        _, call = timed(run, scene)
         rows.append({"kind": kind, "n": n, "first_s": first, "again_s": again, "call_s": call,
                      "us_sweep": 1e6 * again / n, "us_call": 1e6 * call / n})  # fmt: skip
     return rows
