@@ -211,11 +211,9 @@ def format_summary(data: dict) -> str:
 
 
 def model_error(error: Exception) -> str:
-    """The message a model raised at run time, without the traceback XLA wraps it in (or
-    the advice that equinox's own jit adds below it)."""
-    if type(error).__name__ == "EquinoxRuntimeError":
-        return str(error).strip().splitlines()[0]
-    marker = "_EquinoxRuntimeError: "
+    """The message a model raised at run time, without the traceback XLA (or equinox's
+    own jit) wraps it in."""
+    marker = "EquinoxRuntimeError: "
     lines = [line for line in str(error).splitlines() if marker in line]
     return lines[-1].split(marker, 1)[1].strip() if lines else " ".join(str(error).split())
 

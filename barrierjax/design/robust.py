@@ -37,9 +37,12 @@ and 25 degrees, below 12.2 m/s. The deflection of the heavier test vehicle is wh
 binds, as in the deterministic problem of `barrierjax.design.problem`.
 """
 
+import math
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from .. import _checks
@@ -54,10 +57,12 @@ from .section import SteelTube
 
 Vector = Float[Array, " n"]
 
-# The occupant risk of a test is read on a uniform 10 kHz grid up to this time (s); past the
-# impact's end the vehicle moves on unaccelerated, so the window need only hold the impact
-# (3-11 on the default box's softest corner lasts 0.32 s). A longer impact is an error.
-_RISK_WINDOW = 0.5
+# The occupant risk of a test is read on a uniform 10 kHz grid up to `risk_window`; past
+# the impact's end the vehicle moves on unaccelerated, so the window need only hold the
+# impact: this much longer than the longest test against the softest barrier of the box
+# (3-11 on the default box's softest corner lasts 0.32 s: a 0.5 s window), in steps of
+# 0.1 s. A longer impact (a box where softer is not slower) is an error.
+_WINDOW_MARGIN, _WINDOW_STEP = 1.25, 0.1
 _RISK_SAMPLES = 200  # history samples of a test's impact
 CRITERIA = ("deflection", "OIV", "ORA")
 
@@ -72,7 +77,9 @@ class RobustSizing(eqx.Module):
     `impact_mass`, `impact_speed` (kg, m/s normal to the barrier) and the `impacts`'
     distributions (static); the tests' `test_mass`, `test_speed`, `test_angle_deg` and
     `test_names` (static); `deflection_limit` (m), `oiv_limit` (m/s) and `ora_limit`
-    (m/s^2); `level`, `road_class`; `rtol` of the closed form."""
+    (m/s^2); `level`, `road_class`; `rtol` of the closed form; `risk_window` (s), how long
+    a test's occupant risk is read (from the longest test against the box's softest
+    barrier)."""
 
     section: SteelTube
     depth: Float[Array, ""]
@@ -92,6 +99,7 @@ class RobustSizing(eqx.Module):
     level: str = eqx.field(static=True)
     road_class: str = eqx.field(static=True)
     rtol: float = eqx.field(static=True)
+    risk_window: float = eqx.field(static=True)
 
     def __init__(
         self,
@@ -141,6 +149,18 @@ class RobustSizing(eqx.Module):
         if not 0.0 < rtol < 1.0:
             raise ValueError(f"RobustSizing.rtol must be in (0, 1); got {rtol!r}")
         self.rtol = float(rtol)
+        softest = rail_barrier(self, self.lower)
+        longest = max(
+            float(_normal_impact(self, softest, m, v * math.sin(math.radians(a)), 0).duration)
+            for m, v, a in zip(
+                np.asarray(self.test_mass),
+                np.asarray(self.test_speed),
+                np.asarray(self.test_angle_deg),
+            )
+        )
+        self.risk_window = round(
+            _WINDOW_STEP * math.ceil(_WINDOW_MARGIN * longest / _WINDOW_STEP), 6
+        )
 
     @property
     def lower(self) -> Float[Array, "2"]:
@@ -191,11 +211,11 @@ def _test(problem, barrier, mass, speed, angle_deg):
     result = _test_impact(problem, barrier, mass, speed, angle_deg)
     result = eqx.error_if(
         result,
-        result.duration > _RISK_WINDOW,
-        f"RobustSizing: a crash test's impact lasts longer than the {_RISK_WINDOW} s window "
-        "of its occupant risk (a barrier softer than the design box was built for)",
+        result.duration > problem.risk_window,
+        f"RobustSizing: a crash test's impact lasts longer than the {problem.risk_window:g} s "
+        "window of its occupant risk (set by the softest barrier of the box)",
     )
-    risk = assess(result, t_end=_RISK_WINDOW)
+    risk = assess(result, t_end=problem.risk_window)
     oiv = jnp.maximum(jnp.abs(risk.oiv_x), jnp.abs(risk.oiv_y))
     return jnp.stack([result.max_deflection, oiv, jnp.maximum(risk.ora_x, risk.ora_y)])
 
