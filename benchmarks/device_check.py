@@ -29,10 +29,8 @@ def timed(fn, *args):
 
 
 def sweeps() -> list[dict]:
-    import jax.numpy as jnp
-    import numpy as np
+    from sweep import direct
 
-    from barrierjax import Impact, Scene, Vehicle, simulate
     from barrierjax.scene_file import default_scene
     from barrierjax.sweep import Sweep, parse_vary, run_sweep
 
@@ -42,24 +40,12 @@ def sweeps() -> list[dict]:
         "normal": (10**6, ["impact.speed=20 km/h:60 km/h", "vehicle.mass=1000:2500"]),
         "oblique": (10**4, ["impact.angle=10:40"]),
     }
-    rng = np.random.default_rng(0)
     for kind, (n, varies) in cases.items():
         sweep = Sweep([parse_vary(v) for v in varies], n, 0)
         with tempfile.TemporaryDirectory() as folder:
             _, first = timed(run_sweep, s, sweep, Path(folder) / "a.parquet")
             _, again = timed(run_sweep, s, sweep, Path(folder) / "b.parquet")
-        if kind == "normal":
-            speed, mass = rng.uniform(20 / 3.6, 60 / 3.6, n), rng.uniform(1000, 2500, n)
-            scene = Scene(s.barrier, Vehicle(jnp.asarray(mass), s.vehicle.crush_force),
-                          Impact(jnp.asarray(speed)))  # fmt: skip
-            options = {}
-        else:
-            angle = jnp.asarray(rng.uniform(10, 40, n))
-            scene = Scene(s.barrier, s.vehicle, Impact(s.impact.speed, angle))
-            options = {"oblique": True}
-        run = jax.jit(lambda sc, o=options: simulate(sc, n_history=0, **o))
-        timed(run, scene)
-        _, call = timed(run, scene)
+        call = direct(kind, n)  # benchmarks/sweep.py's: the same scenarios as one call
         rows.append({"kind": kind, "n": n, "first_s": first, "again_s": again, "call_s": call,
                      "us_sweep": 1e6 * again / n, "us_call": 1e6 * call / n})  # fmt: skip
     return rows

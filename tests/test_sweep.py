@@ -109,6 +109,20 @@ def test_an_unwritable_output_is_refused_in_one_line(capsys, tmp_path):
     assert capsys.readouterr().err.strip().splitlines()[-1].startswith(f"error: --out {out}")
 
 
+# The sweep that several devices or processes solve, against one.
+DEVICE_SWEEP = ["sweep", "--vary", "impact.speed=20 km/h:60 km/h", "--vary",
+                "vehicle.mass=1000:2500", "--samples", "100", "--chunk", "64", "--no-plots"]  # fmt: skip
+
+
+def _assert_same_rows(path, reference):
+    """The two files hold the same columns, equal to 1e-12."""
+    a, b = pq.read_table(path), pq.read_table(reference)
+    assert a.column_names == b.column_names
+    for name in a.column_names:
+        np.testing.assert_allclose(a.column(name).to_numpy(), b.column(name).to_numpy(),
+                                   rtol=1e-12, atol=0)  # fmt: skip
+
+
 def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
     """The chunk's rows sharded over 4 host-emulated devices (a process of its own:
     the device count is fixed at start-up) against this process's one device."""
@@ -116,8 +130,7 @@ def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
     import subprocess
     import sys
 
-    args = ["sweep", "--vary", "impact.speed=20 km/h:60 km/h", "--vary", "vehicle.mass=1000:2500",
-            "--samples", "100", "--chunk", "64", "--no-plots"]  # fmt: skip
+    args = DEVICE_SWEEP
     four = tmp_path / "four.parquet"
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=4"}
     code = ("import jax, sys; from barrierjax.cli import main; assert jax.local_device_count() "
@@ -126,11 +139,7 @@ def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
                    capture_output=True)  # fmt: skip
     one = tmp_path / "one.parquet"
     assert main([*args, "--out", str(one)]) == 0
-    a, b = pq.read_table(four), pq.read_table(one)
-    assert a.column_names == b.column_names
-    for name in a.column_names:
-        np.testing.assert_allclose(a.column(name).to_numpy(), b.column(name).to_numpy(),
-                                   rtol=1e-12, atol=0)  # fmt: skip
+    _assert_same_rows(four, one)
 
 
 def _free_port() -> int:
@@ -149,8 +158,7 @@ def test_two_processes_of_jax_distributed_give_the_rows_of_one(tmp_path):
     import subprocess
     import sys
 
-    args = ["sweep", "--vary", "impact.speed=20 km/h:60 km/h", "--vary", "vehicle.mass=1000:2500",
-            "--samples", "100", "--chunk", "64", "--no-plots"]  # fmt: skip
+    args = DEVICE_SWEEP
     two = tmp_path / "two.parquet"
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
     code = ("import jax, sys; from barrierjax.cli import main; status = main(sys.argv[1:]); "
@@ -169,11 +177,7 @@ def test_two_processes_of_jax_distributed_give_the_rows_of_one(tmp_path):
     assert "scenarios in" in outputs[0][0] and "scenarios in" not in outputs[1][0]
     one = tmp_path / "one.parquet"
     assert main([*args, "--out", str(one)]) == 0
-    a, b = pq.read_table(two), pq.read_table(one)
-    assert a.column_names == b.column_names
-    for name in a.column_names:
-        np.testing.assert_allclose(a.column(name).to_numpy(), b.column(name).to_numpy(),
-                                   rtol=1e-12, atol=0)  # fmt: skip
+    _assert_same_rows(two, one)
 
 
 SYSTEM_SCENE = """test = "MASH 3-11"

@@ -75,14 +75,9 @@ class DesignReport(eqx.Module):
         a non-finite float (e.g. the grid's objective when no grid point is feasible)
         becomes None."""
 
-        def plain(value):
-            if isinstance(value, tuple):
-                return [plain(v) for v in value]
-            if isinstance(value, float) and not math.isfinite(value):
-                return None
-            return value
-
-        return {field.name: plain(getattr(self, field.name)) for field in dataclasses.fields(self)}
+        return {
+            field.name: json_plain(getattr(self, field.name)) for field in dataclasses.fields(self)
+        }
 
     def summary(self) -> str:
         """Readable multi-line text, in engineering units."""
@@ -128,7 +123,19 @@ class DesignReport(eqx.Module):
         return "\n".join(lines)
 
 
-def _timed(fn):
+def json_plain(value):
+    """`value` for JSON: tuples as lists, dicts value by value, a non-finite float as None."""
+    if isinstance(value, tuple | list):
+        return [json_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: json_plain(v) for k, v in value.items()}
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def timed(fn):
+    """(fn()'s result, once JAX has computed it; the wall time it took, s)."""
     start = time.perf_counter()
     out = jax.block_until_ready(fn())
     return out, time.perf_counter() - start
@@ -145,11 +152,11 @@ def optimize(
     inner_steps = solve_options.get("inner_steps", 100)
     run_solve = lambda: solve(problem, **solve_options)
     run_grid = lambda: grid_search(problem, grid_n, refine=grid_refine)
-    sol, time_solve = _timed(run_solve)
-    grid, time_grid = _timed(run_grid)
+    sol, time_solve = timed(run_solve)
+    grid, time_grid = timed(run_grid)
     # The same calls again, compiled: the run times without compilation.
-    _, warm_solve = _timed(run_solve)
-    _, warm_grid = _timed(run_grid)
+    _, warm_solve = timed(run_solve)
+    _, warm_grid = timed(run_grid)
 
     k = int(sol.best)
     x = np.asarray(sol.x[k])

@@ -6,15 +6,14 @@ the design on its constraints' boundary, by bisection), evaluates a baseline bar
 
 import dataclasses
 import math
-import time
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..scene import Barrier
 from .grid import grid_along_boundary
 from .optimizer import minimise
+from .report import json_plain, timed
 from .robust import (
     CRITERIA,
     RobustSizing,
@@ -116,15 +115,7 @@ class RobustReport:
 
     def as_dict(self) -> dict:
         """Plain JSON-serialisable values (a non-finite float becomes None)."""
-
-        def plain(value):
-            if isinstance(value, float) and not math.isfinite(value):
-                return None
-            if isinstance(value, dict):
-                return {k: plain(v) for k, v in value.items()}
-            return value
-
-        return plain(dataclasses.asdict(self))
+        return json_plain(dataclasses.asdict(self))
 
     def summary(self) -> str:
         """Readable multi-line text, in engineering units."""
@@ -172,12 +163,6 @@ class RobustReport:
         return "\n".join(lines)
 
 
-def _timed(fn):
-    start = time.perf_counter()
-    out = jax.block_until_ready(fn())
-    return out, time.perf_counter() - start
-
-
 def optimize_robust(
     problem: RobustSizing,
     baseline: Barrier,
@@ -194,9 +179,9 @@ def optimize_robust(
     options = {"inner_steps": 25, **options}
     starts = jnp.asarray(STARTS, dtype=problem.lower.dtype)
     progress("optimizing (compiling the model and its gradient, then about a minute)...")
-    solution, time_solve = _timed(lambda: minimise(form, starts, **options))
+    solution, time_solve = timed(lambda: minimise(form, starts, **options))
     progress("checking against the brute-force grid...")
-    grid, time_grid = _timed(lambda: grid_along_boundary(form, grid_n))
+    grid, time_grid = timed(lambda: grid_along_boundary(form, grid_n))
     k = int(solution.best)
     x = jnp.asarray(solution.x[k])
     t, q0 = (float(v) for v in x)
