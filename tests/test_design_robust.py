@@ -88,6 +88,10 @@ def test_impacts_and_their_bad_inputs():
         real_world_impacts("Autobahn")
     with pytest.raises(ValueError, match="n_mass must be a positive integer"):
         real_world_impacts(n_mass=0)
+    with pytest.raises(ValueError, match="Lognormal.through needs"):
+        Lognormal.through(0.5, 30e3, 0.95, 20e3, "falling percentiles")
+    with pytest.raises(ValueError, match="Lognormal.through needs"):
+        Lognormal.through(0.95, 20e3, 0.5, 30e3, "probabilities out of order")
 
 
 # --------------------------------------------------------------------------------------

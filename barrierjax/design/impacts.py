@@ -88,7 +88,13 @@ class Lognormal:
 
     @classmethod
     def through(cls, p1, x1, p2, x2, source, published=()):
-        """The lognormal whose p1 and p2 quantiles are x1 and x2."""
+        """The lognormal whose p1 and p2 quantiles are x1 and x2 (0 < p1 < p2 < 1 and
+        0 < x1 < x2, else `ValueError`)."""
+        if not (0.0 < p1 < p2 < 1.0 and 0.0 < x1 < x2 < math.inf):
+            raise ValueError(
+                "Lognormal.through needs 0 < p1 < p2 < 1 and 0 < x1 < x2 (finite); got "
+                f"p1={p1!r}, x1={x1!r}, p2={p2!r}, x2={x2!r}"
+            )
         z1, z2 = _STANDARD.inv_cdf(p1), _STANDARD.inv_cdf(p2)
         sigma = math.log(x2 / x1) / (z2 - z1)
         return cls(math.log(x1) - sigma * z1, sigma, source, tuple(published))

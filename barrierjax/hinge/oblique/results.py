@@ -255,7 +255,8 @@ def finish(solution: Solution, *, n_history, n_x) -> tuple[ObliqueImpact, Outcom
 
 
 def rigid_barrier(mu, phi, vn, vh, friction, *, n_history, n_x) -> ObliqueImpact:
-    """phi <= 1: the barrier never yields, and the vehicle crushes against it as against a
+    """phi <= 1 (report 3.2's force ratio P0 / P_b, P_b = 4 (M0 q0)^1/2 the beam's static
+    collapse load): the barrier never yields, and the vehicle crushes against it as against a
     rigid wall, at P0 (phi) until its normal speed is spent, at T* = mu V_N / phi, sliding
     meanwhile under the friction force friction phi (its slide stopped where V_H runs
     out first); then it moves on along the barrier at what is left of V_H, with no force
