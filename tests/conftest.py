@@ -1,3 +1,5 @@
+import os
+
 import jax
 import pytest
 
@@ -5,8 +7,12 @@ from barrierjax import compilation_cache
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
-# The persistent compilation cache (BARRIERJAX_CACHE_DIR=off to run without): the workers
-# share what each compiles, and a second run of the suite compiles almost nothing.
+# The persistent compilation cache is off for the suite (and the processes it starts) unless
+# BARRIERJAX_CACHE_DIR names a folder: in a cold run its only effect is that processes load
+# each other's executables, and a deserialized executable once took a CI worker down
+# (a segmentation fault in jaxlib 0.10.2's CPU `deserialize_executable`). The tests of the
+# cache itself give it folders of their own.
+os.environ.setdefault("BARRIERJAX_CACHE_DIR", "off")
 compilation_cache.enable()
 
 

@@ -317,7 +317,8 @@ def test_console_script_second_run_neither_traces_nor_compiles_the_models(tmp_pa
     bad scene exits 2 with one line on stderr."""
     env = {**os.environ, "BARRIERJAX_CACHE_DIR": str(tmp_path / "cache"), "JAX_LOG_COMPILES": "1"}
     run = lambda *args: subprocess.run(
-        ["barrierjax", "run", *args], capture_output=True, text=True, env=env, cwd=tmp_path
+        ["barrierjax", "run", *args], capture_output=True, text=True, env=env, cwd=tmp_path,
+        timeout=300,
     )
     first, second = run("--no-plots"), run("--no-plots")
     assert first.returncode == second.returncode == 0, first.stderr + second.stderr

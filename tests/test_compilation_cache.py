@@ -43,11 +43,13 @@ def test_a_second_process_loads_what_the_first_compiled(tmp_path):
         "print(float(normal_impact(2.0, 3.0, 0.5).damage))"
     )
     env = {**os.environ, "BARRIERJAX_CACHE_DIR": str(tmp_path / "cache")}
-    first = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True)
+    first = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True,
+                           timeout=300)
     assert first.returncode == 0, first.stderr
     entries = sorted(p.name for p in Path(tmp_path / "cache").iterdir())
     assert entries, "nothing was written to the cache"
-    second = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True)
+    second = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True,
+                           timeout=300)
     assert second.returncode == 0, second.stderr
     assert second.stdout == first.stdout
     assert sorted(p.name for p in Path(tmp_path / "cache").iterdir()) == entries
@@ -77,7 +79,8 @@ print(len(traces), float(out["value"]), out["parts"][0].tolist(), out["parts"][1
 
 def _run(program, cache):
     env = {**os.environ, "BARRIERJAX_CACHE_DIR": str(cache)}
-    done = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", program], env=env, capture_output=True, text=True,
+                           timeout=300)
     assert done.returncode == 0, done.stderr
     return done.stdout.split()
 

@@ -136,7 +136,7 @@ def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
     code = ("import jax, sys; from barrierjax.cli import main; assert jax.local_device_count() "
             "== 4; sys.exit(main(sys.argv[1:]))")  # fmt: skip
     subprocess.run([sys.executable, "-c", code, *args, "--out", str(four)], env=env, check=True,
-                   capture_output=True)  # fmt: skip
+                   capture_output=True, timeout=300)  # fmt: skip
     one = tmp_path / "one.parquet"
     assert main([*args, "--out", str(one)]) == 0
     _assert_same_rows(four, one)
@@ -170,7 +170,11 @@ def test_two_processes_of_jax_distributed_give_the_rows_of_one(tmp_path):
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         for i in range(2)
     ]  # fmt: skip
-    outputs = [p.communicate(timeout=300) for p in processes]
+    try:
+        outputs = [p.communicate(timeout=300) for p in processes]
+    finally:
+        for p in processes:
+            p.kill()  # where one hung: its peer waits for it
     for p, (out, err) in zip(processes, outputs):
         assert p.returncode == 0, err[-2000:]
     # Process 0 sums up, alone (gloo prints its connections to stdout in both).
