@@ -1,4 +1,4 @@
-"""JAX's persistent compilation cache, on by default for the command line and the tests.
+"""JAX's persistent compilation cache, on by default for the command line.
 
 A model's first call in a fresh process is mostly XLA compiling it (seconds); the
 persistent cache keeps every compiled executable on disk, keyed by the program, the
