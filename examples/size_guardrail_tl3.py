@@ -12,8 +12,8 @@ kg/m^3) plus a post per spacing: a W6x8.5 (8.5 lb/ft by its designation) 6 ft lo
 23.1 kg (the MGS's standard post; the blockout and hardware left out). A brute-force grid
 is the answer here, not the gradient optimiser of `barrierjax.design`: the script checks
 the working width's gradient against finite differences at the chosen design and prints
-how far apart they are (posts that yield or let go of the rail make the crash numbers
-rough in the spacing). MASH's exit box is not judged (see `barrierjax.system.assessment`).
+how far apart they are (over a whole impact, with posts failing and the vehicle sliding
+along the rail, the crash numbers are rough in the spacing: the README says how much). MASH's exit box is not judged (see `barrierjax.system.assessment`).
 """
 
 import argparse
