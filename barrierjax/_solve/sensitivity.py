@@ -14,7 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 
 
-def forward_jacobian_jvp(fn, n_differentiable=None, differentiated=None):
+def forward_jacobian_jvp(fn, n_differentiable=None, differentiated=None, value_and_jacobian=None):
     """`fn(*scalars) -> PyTree` with a custom JVP built from its forward Jacobian.
 
     For scalars the primal is computed once, alongside all the directional derivatives (a
@@ -36,8 +36,15 @@ def forward_jacobian_jvp(fn, n_differentiable=None, differentiated=None):
     `differentiated` (default `fn`): the same function, written otherwise, whose forward
     Jacobian is taken, and which also gives the primal where one is differentiated (for
     example written to compile fast, where `fn` is written to run fast).
+    `value_and_jacobian(*params) -> (out, jacobian)` (default `forward_jacobian` of
+    `differentiated`): where it is a jitted function, every derivative of `fn`, whichever
+    arguments carry tangents, runs one compiled program.
     """
     differentiated = fn if differentiated is None else differentiated
+    if value_and_jacobian is None:
+        value_and_jacobian = lambda *params: forward_jacobian(
+            differentiated, params, n_differentiable
+        )
 
     @jax.custom_jvp
     def wrapped(*params):
@@ -46,28 +53,41 @@ def forward_jacobian_jvp(fn, n_differentiable=None, differentiated=None):
     @wrapped.defjvp
     def _jvp(params, tangents):
         n = len(params) if n_differentiable is None else n_differentiable
-        inputs, fixed = params[:n], params[n:]
-        basis = jnp.eye(n, dtype=jnp.result_type(*inputs))
-        if jnp.ndim(inputs[0]) == 0:
-
-            def along(direction):
-                per_problem = tuple(d * jnp.ones_like(x) for d, x in zip(direction, inputs))
-                return jax.jvp(lambda *x: differentiated(*x, *fixed), inputs, per_problem)
-
-            out, jacobian = jax.vmap(along, out_axes=(None, 0))(basis)
-        else:
-            out, jacobian = _directions_as_problems(differentiated, inputs, fixed, basis)
-        tangent = jnp.stack(tangents[:n])
-
-        def along_tangent(j, o):
-            if jnp.issubdtype(o.dtype, jnp.inexact):
-                weights = tangent.reshape(tangent.shape + (1,) * (j.ndim - tangent.ndim))
-                return jnp.sum(weights * j, axis=0)
-            return np.zeros(o.shape, jax.dtypes.float0)  # counts and flags
-
-        return out, jax.tree.map(along_tangent, jacobian, out)
+        out, jacobian = value_and_jacobian(*params)
+        leaves, tree = jax.tree.flatten(out)
+        inexact = [jnp.issubdtype(o.dtype, jnp.inexact) for o in leaves]
+        jacobians = [j for j, real in zip(tree.flatten_up_to(jacobian), inexact) if real]
+        products = iter(_along(jacobians, jnp.stack(tangents[:n])))
+        float0 = lambda o: np.zeros(o.shape, jax.dtypes.float0)  # counts and flags
+        return out, tree.unflatten(
+            [next(products) if real else float0(o) for o, real in zip(leaves, inexact)]
+        )
 
     return wrapped
+
+
+@jax.jit
+def _along(jacobians, tangent):
+    """Each Jacobian (directions leading) times the tangent: one program, not an operation
+    at a time, where the JVP runs outside a jit."""
+    weights = lambda j: tangent.reshape(tangent.shape + (1,) * (j.ndim - tangent.ndim))
+    return [jnp.sum(weights(j) * j, axis=0) for j in jacobians]
+
+
+def forward_jacobian(fn, params, n_differentiable=None):
+    """(fn(*params), its Jacobian in the first `n_differentiable` params, directions
+    leading), as `forward_jacobian_jvp` takes it."""
+    n = len(params) if n_differentiable is None else n_differentiable
+    inputs, fixed = params[:n], params[n:]
+    basis = jnp.eye(n, dtype=jnp.result_type(*inputs))
+    if jnp.ndim(inputs[0]) == 0:
+
+        def along(direction):
+            per_problem = tuple(d * jnp.ones_like(x) for d, x in zip(direction, inputs))
+            return jax.jvp(lambda *x: fn(*x, *fixed), inputs, per_problem)
+
+        return jax.vmap(along, out_axes=(None, 0))(basis)
+    return _directions_as_problems(fn, inputs, fixed, basis)
 
 
 def _directions_as_problems(fn, inputs, fixed, basis):

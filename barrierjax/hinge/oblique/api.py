@@ -10,10 +10,10 @@ import numpy as np
 from jax.core import Tracer
 
 from ... import _checks
-from ...compilation_cache import stored_program
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
-from ..._solve.sensitivity import forward_jacobian_jvp
+from ..._solve.sensitivity import forward_jacobian, forward_jacobian_jvp
+from ...compilation_cache import stored_program
 from .results import MovingLoad, ObliqueImpact, build_history, finish, rigid_barrier
 from .transitions import (
     OVERTAKEN_MESSAGE,
@@ -152,11 +152,17 @@ def oblique_impact(
     args = jnp.broadcast_arrays(mu, safe_phi, vn, vh, friction)
     rtol = _tolerance(rtol, args[0].dtype)
     flat = args[0].ndim > 0
-    inputs = tuple(a.ravel() for a in args) if flat else args
+    # Strongly typed: a Python number and an array of its dtype then run one program.
+    inputs = tuple(jnp.asarray(a.ravel() if flat else a, a.dtype) for a in args)
 
     def solve(budget):
         options = {"max_steps": budget, "n_history": n_history, "n_x": _N_X}
-        return _oblique_solved(*inputs, rtol, **options)
+        differentiable = forward_jacobian_jvp(
+            functools.partial(_oblique_solved, **options),
+            n_differentiable=5,
+            value_and_jacobian=functools.partial(_oblique_jacobian, **options),
+        )
+        return differentiable(*inputs, rtol)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
     if flat:
@@ -184,35 +190,49 @@ def _of_lane(carry: Carry, lane) -> Carry:
 _LANES, _REFILL = 384, 48
 
 
-@stored_program
-@functools.partial(jax.jit, static_argnames=("max_steps", "n_history", "n_x"))
-def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
-    def solve(*inputs_and_rtol, batched=mu.ndim > 0):
-        *inputs, rtol = inputs_and_rtol
-        loop = step_loop(rtol, max_steps, batched=batched)
-        start = lambda x: initial_carry(loop, *x, history=n_history > 0)
-        results = functools.partial(finish, n_history=n_history, n_x=n_x)
-        if mu.ndim == 0:
-            return results(loop.solve(start(inputs)))
-        return solve_queued(
-            start,
-            loop.step,
-            loop.running,
-            lambda carry, lane: results(loop.solution(_of_lane(carry, lane))),
-            tuple(inputs),
-            buffers=lambda carry: carry.recording.buffer,
-            seed_rows=1,
-            lanes=_LANES,
-            refill=_REFILL,
-        )
-
-    # A batch's derivatives come from the step loop written for a single solve: its
-    # forward under `vmap` ran 2.9 times slower (1e4 scenarios), but the loop written for
-    # a batch, differentiated, took 46 s to compile for 10 scenarios against 23 s (2 cores).
-    differentiated = functools.partial(solve, batched=False)
-    return forward_jacobian_jvp(solve, n_differentiable=5, differentiated=differentiated)(
-        mu, phi, vn, vh, friction, rtol
+def _solve(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x, batched):
+    """The step loop from impact to exit: for scalars, one solve; for arrays, their
+    scenarios in the lanes of a queue, with the loop written for a batch (`batched`) or
+    for a single solve under `vmap`."""
+    loop = step_loop(rtol, max_steps, batched=batched)
+    start = lambda x: initial_carry(loop, *x, history=n_history > 0)
+    results = functools.partial(finish, n_history=n_history, n_x=n_x)
+    inputs = (mu, phi, vn, vh, friction)
+    if jnp.ndim(mu) == 0:
+        return results(loop.solve(start(inputs)))
+    return solve_queued(
+        start,
+        loop.step,
+        loop.running,
+        lambda carry, lane: results(loop.solution(_of_lane(carry, lane))),
+        inputs,
+        buffers=lambda carry: carry.recording.buffer,
+        seed_rows=1,
+        lanes=_LANES,
+        refill=_REFILL,
     )
+
+
+_STATIC = ("max_steps", "n_history", "n_x")
+
+
+@stored_program
+@functools.partial(jax.jit, static_argnames=_STATIC)
+def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
+    options = {"max_steps": max_steps, "n_history": n_history, "n_x": n_x}
+    return _solve(mu, phi, vn, vh, friction, rtol, **options, batched=mu.ndim > 0)
+
+
+# One program for every derivative, whichever arguments carry tangents (the custom JVP of
+# `oblique_impact` calls it outside any jit of its own). A batch's derivatives come from
+# the step loop written for a single solve: its forward under `vmap` ran 2.9 times slower
+# (1e4 scenarios), but the loop written for a batch, differentiated, took 46 s to compile
+# for 10 scenarios against 23 s (2 cores).
+@functools.partial(jax.jit, static_argnames=_STATIC)
+def _oblique_jacobian(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
+    options = {"max_steps": max_steps, "n_history": n_history, "n_x": n_x}
+    single = functools.partial(_solve, **options, batched=False)
+    return forward_jacobian(single, (mu, phi, vn, vh, friction, rtol), n_differentiable=5)
 
 
 def moving_load(
