@@ -1,5 +1,6 @@
 """barrierjax.hinge.oblique_impact and moving_load (report 3.3)."""
 
+import logging
 import math
 import re
 
@@ -394,12 +395,13 @@ def test_unyielding_barrier_is_a_rigid_wall(friction):
     assert float(jnp.max(jnp.abs(h.deflected_shape))) == 0.0
 
 
-def test_batches_across_phi_one_equal_single_runs_and_their_derivatives_match():
+def test_batches_across_phi_one_equal_single_runs_and_their_derivatives_match(caplog):
     """A batch with lanes on both sides of phi = 1 equals single runs; the derivatives of
     the rigid wall's crush and exit speed are the closed form's, and across phi = 1 the
     crush is continuous (the barrier starts to yield at phi = 1 and takes little just
     above it: 1 % at phi = 1.001, where the step loop needs 5614 steps, in proportion to
-    1 / (phi - 1))."""
+    1 / (phi - 1)). The second gradient, with respect to another argument, compiles no
+    program of the model: every derivative runs the first one's."""
     mu = jnp.array([5.0, 5.0, 8.0, 8.0])
     phi = jnp.array([0.7, 1.0, 1.001, 2.5])
     vn, vh = jnp.array([0.3, 0.2, 0.25, 0.3]), jnp.array([0.5, 0.4, 0.3, 0.2])
@@ -415,5 +417,8 @@ def test_batches_across_phi_one_equal_single_runs_and_their_derivatives_match():
         jnp.array([0.3, 0.5])
     )
     np.testing.assert_allclose(grad, [-0.1, 1.0], rtol=1e-12)
-    d_damage = jax.grad(lambda p: oblique_impact(5.0, p, 0.3, 0.5).damage)(0.7)
+    with caplog.at_level(logging.WARNING), jax.log_compiles():
+        d_damage = jax.grad(lambda p: oblique_impact(5.0, p, 0.3, 0.5).damage)(0.7)
+    compiled = [r.getMessage() for r in caplog.records if "XLA compilation" in r.getMessage()]
+    assert compiled and not [m for m in compiled if "oblique" in m], compiled
     assert float(d_damage) == pytest.approx(-0.5 * 5.0 * 0.3**2 / 0.7**2, rel=1e-12)
