@@ -14,7 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 
 
-def forward_jacobian_jvp(fn, n_differentiable=None, differentiated=None, value_and_jacobian=None):
+def forward_jacobian_jvp(fn, n_differentiable=None, value_and_jacobian=None):
     """`fn(*scalars) -> PyTree` with a custom JVP built from its forward Jacobian.
 
     For scalars the primal is computed once, alongside all the directional derivatives (a
@@ -33,18 +33,14 @@ def forward_jacobian_jvp(fn, n_differentiable=None, differentiated=None, value_a
 
     Only the first `n_differentiable` arguments (default: all) are differentiated; the
     rest (tolerances, traced so that changing them does not recompile) get no derivative.
-    `differentiated` (default `fn`): the same function, written otherwise, whose forward
-    Jacobian is taken, and which also gives the primal where one is differentiated (for
-    example written to compile fast, where `fn` is written to run fast).
-    `value_and_jacobian(*params) -> (out, jacobian)` (default `forward_jacobian` of
-    `differentiated`): where it is a jitted function, every derivative of `fn`, whichever
-    arguments carry tangents, runs one compiled program.
+    `value_and_jacobian(*params) -> (out, jacobian)` (default `forward_jacobian` of `fn`)
+    gives the primal and the Jacobian where one is differentiated: for example the same
+    solve written to compile fast, where `fn` is written to run fast; and where it is a
+    jitted function, every derivative of `fn`, whichever arguments carry tangents, runs one
+    compiled program.
     """
-    differentiated = fn if differentiated is None else differentiated
     if value_and_jacobian is None:
-        value_and_jacobian = lambda *params: forward_jacobian(
-            differentiated, params, n_differentiable
-        )
+        value_and_jacobian = lambda *params: forward_jacobian(fn, params, n_differentiable)
 
     @jax.custom_jvp
     def wrapped(*params):
