@@ -40,7 +40,7 @@ def finish(state, lane):
     return {"total": jnp.sum(jnp.where(recorded, state["rows"][lane], 0.0)), "k": state["k"]}
 
 
-def solve(steps, scale, lanes, refill):
+def solve(steps, scale, lanes, refill, count=None):
     return solve_queued(
         start,
         step,
@@ -51,6 +51,7 @@ def solve(steps, scale, lanes, refill):
         seed_rows=1,
         lanes=lanes,
         refill=refill,
+        count=count,
     )
 
 
@@ -78,3 +79,17 @@ def test_tangents_follow_each_problem():
 def test_no_problems_give_empty_results():
     out = solve(jnp.zeros(0, jnp.int32), jnp.zeros(0), 3, 2)
     assert out["total"].shape == (0,) and out["k"].shape == (0,)
+
+
+@pytest.mark.parametrize("count", [0, 2, 7])
+def test_problems_past_the_count_are_never_started(count):
+    """The padding of a batch: its problems are neither stepped nor finished (zeros), and
+    the real ones are solved as without it; the count is traced (one program for all)."""
+    steps = jnp.array([5, 1, 12, 3, 7, 2, 9, 4], jnp.int32)
+    scale = jnp.linspace(1.0, 2.0, 8)
+    out = jax.jit(solve, static_argnums=(2, 3))(steps, scale, 3, 2, jnp.asarray(count))
+    m = np.asarray(steps)[:count]
+    np.testing.assert_array_equal(out["k"], np.concatenate([m, np.zeros(8 - count, int)]))
+    expected = np.asarray(scale)[:count] * (1 + m * (m - 1) / 2)
+    np.testing.assert_allclose(out["total"][:count], expected, rtol=1e-12)
+    assert not np.any(np.asarray(out["total"][count:]))

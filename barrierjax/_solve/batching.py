@@ -1,4 +1,6 @@
-"""Solving many scenarios in vmapped chunks."""
+"""Solving many scenarios: in vmapped chunks, and at padded batch sizes."""
+
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -16,3 +18,35 @@ def sorted_chunks(solve, inputs: tuple, key, batch_size: int):
     )
     unsort = jnp.argsort(order)
     return jax.tree.map(lambda leaf: leaf[unsort], solved)
+
+
+def padded_size(n: int, quantum: int) -> int:
+    """The batch size at which `n` scenarios are solved: the next power of two up to
+    `quantum`, then the next multiple of `quantum`. Sweeps of nearby sizes then run one
+    compiled program (a new size is a new compilation, seconds to minutes), for at most
+    twice the work on a batch just above a power of two, and less than `quantum` scenarios
+    more above it."""
+    if n <= quantum:
+        return 1 << max(n - 1, 0).bit_length()
+    return -(-n // quantum) * quantum
+
+
+def solve_padded(solve, inputs: tuple, quantum: int):
+    """`solve(*inputs)` for inputs of one leading axis of n scenarios, run at
+    `padded_size(n, quantum)` on inputs padded with copies of their last scenario; the
+    results of the first n are returned. `solve` is called with the padded inputs and the
+    number n of real ones, as an array (a new n is then no new program), for a solve that
+    can skip the copies."""
+    n = inputs[0].shape[0]
+    size = padded_size(n, quantum)
+    count = jnp.asarray(n, jnp.int32)
+    if n == 0 or size == n:
+        return solve(*inputs, count)
+    edge = lambda a: jnp.pad(a, [(0, size - n)] + [(0, 0)] * (a.ndim - 1), mode="edge")
+    return _first(solve(*map(edge, inputs), count), n)
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _first(tree, n: int):
+    """The first `n` rows of every leaf: one program for the whole result."""
+    return jax.tree.map(lambda leaf: leaf[:n], tree)

@@ -25,6 +25,7 @@ def solve_queued(
     seed_rows: int,
     lanes: int,
     refill: int,
+    count=None,
 ):
     """`finish(c, lane)` for each problem `x` along the leading axis of `inputs`, where `c`
     is `start(x)` stepped by `step` while `running(c)` in lane `lane`.
@@ -36,7 +37,11 @@ def solve_queued(
     refill copies no more. `lanes` problems run at once; finished lanes are finished and
     refilled `refill` at a time, or all together once none is running. `finish` sees the
     buffers of every lane (leading axis: the lanes), so that it reads its lane's rows where
-    they lie rather than a copy of its whole buffers."""
+    they lie rather than a copy of its whole buffers.
+
+    `count` (traced; default: all of them) is how many of the problems are real: the rest
+    pad the inputs to a size whose program is already compiled, and are never started
+    (their results are zeros)."""
     n = jax.tree.leaves(inputs)[0].shape[0]
     if n == 0:
         # The results' shapes, from the same solve of a single (zero) problem.
@@ -51,6 +56,7 @@ def solve_queued(
 
     carry = jax.vmap(start)(take(inputs, jnp.arange(lanes)))
     owner = jnp.arange(lanes)  # the problem in each lane; n: none
+    count = jnp.asarray(n if count is None else count).astype(owner.dtype)
 
     def finish_lanes(carry, lane):
         axes = eqx.tree_at(buffers, jax.tree.map(lambda _: 0, carry), replace_fn=lambda _: None)
@@ -77,14 +83,14 @@ def solve_queued(
         """Up to `refill` finished lanes finished into `results`, and the problems next in
         the queue started in their place. Their buffers are seeded by the caller, outside
         the conditional that runs this: through it, they would be copied whole."""
-        finished = ~busy & (owner < n)
+        finished = ~busy & (owner < count)
         lane = jnp.nonzero(finished, size=refill, fill_value=lanes)[0]
         valid = lane < lanes
         lane_in = jnp.minimum(lane, lanes - 1)
         problem = jnp.where(valid, owner[lane_in], n)
         following = queued + jnp.cumsum(valid) - 1
         fresh = jax.vmap(start)(take(inputs, jnp.minimum(following, n - 1)))
-        following = jnp.where(following < n, following, n)
+        following = jnp.where(following < count, following, n)
         lane = jnp.where(valid, lane, lanes)
         # Out-of-range indices (no lane, no problem) are dropped.
         put = lambda old, new, index: old.at[index].set(new, mode="drop")
@@ -93,9 +99,9 @@ def solve_queued(
             jax.tree.map(
                 lambda old, new: put(old, new, lane), without_buffers(carry), without_buffers(fresh)
             ),
-            put(busy, lanes_running(fresh) & (following < n), lane),
+            put(busy, lanes_running(fresh) & (following < count), lane),
             put(owner, following, lane),
-            jnp.minimum(queued + jnp.sum(valid), n),
+            jnp.minimum(queued + jnp.sum(valid), count),
             jax.tree.map(lambda r, d: put(r, d, problem), results, done),
             lane,
             jax.tree.map(lambda b: b[:, :seed_rows], buffers(fresh)),
@@ -109,8 +115,8 @@ def solve_queued(
     def body(state):
         carry, busy, owner, queued, results = state
         carry = advance(carry, busy)
-        busy = lanes_running(carry) & (owner < n)
-        due = (jnp.sum(~busy & (owner < n)) >= refill) | ~jnp.any(busy)
+        busy = lanes_running(carry) & (owner < count)
+        due = (jnp.sum(~busy & (owner < count)) >= refill) | ~jnp.any(busy)
         small, busy, owner, queued, results, lane, seeds = jax.lax.cond(
             due, refilled, unchanged, carry, busy, owner, queued, results
         )
@@ -125,6 +131,6 @@ def solve_queued(
         lambda leaf: jnp.zeros((n, *leaf.shape[1:]), leaf.dtype),
         jax.eval_shape(finish_lanes, carry, owner[:1]),
     )
-    state = (carry, lanes_running(carry), owner, jnp.asarray(lanes), results)
-    _, _, _, _, results = jax.lax.while_loop(lambda s: jnp.any(s[2] < n), body, state)
+    state = (carry, lanes_running(carry) & (owner < count), owner, jnp.asarray(lanes), results)
+    _, _, _, _, results = jax.lax.while_loop(lambda s: jnp.any(s[2] < count), body, state)
     return results

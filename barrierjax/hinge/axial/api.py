@@ -9,6 +9,7 @@ import jax
 import jax.numpy as jnp
 
 from ... import _checks
+from ..._solve.batching import solve_padded
 from ..._solve.sensitivity import forward_jacobian_jvp
 from ..normal.api import checked_inputs, normal_impact
 from ..normal.results import NormalImpact, normal_result, rigid_barrier, scaled_history
@@ -103,8 +104,9 @@ def axial_impact(
 
     Returns a `NormalImpact`: `t_string` is where N reaches N0 (inf if it never does),
     `string_work` the string's plastic work, and the history has `axial_force` and the
-    string's profile. Scalars, or arrays of one shape (vmapped); `rtol` is traced, so a
-    new tolerance does not recompile.
+    string's profile. Scalars, or arrays of one shape (vmapped, padded with copies to the
+    next power of two, so that batches of nearby sizes share one compiled program);
+    `rtol` is traced, so a new tolerance does not recompile.
     """
     if isinstance(axial_ratio, int | float) and axial_ratio == 0:
         return normal_impact(mass_ratio, force_ratio, speed, rtol=rtol, n_history=n_history)
@@ -115,10 +117,20 @@ def axial_impact(
     if not 0.0 < string_courant <= 1.0:
         raise ValueError(f"string_courant must be in (0, 1]; got {string_courant!r}")
     args = jnp.broadcast_arrays(mu, phi, speed, eta0)
-    return _axial_impact(
-        *args,
-        jnp.asarray(rtol, args[0].dtype),
+    solve = functools.partial(
+        _axial_impact,
+        rtol=jnp.asarray(rtol, args[0].dtype),
         n_history=int(n_history),
         string_cells=int(string_cells),
         string_courant=float(string_courant),
     )
+    shape = args[0].shape
+    if not shape:
+        return solve(*args)
+    flat = solve_padded(lambda *x: solve(*x[:-1]), tuple(a.ravel() for a in args), _QUANTUM)
+    return jax.tree.map(lambda leaf: leaf.reshape(shape + leaf.shape[1:]), flat)
+
+
+# Arrays are solved as one flat batch padded to the next power of two up to this many
+# scenarios, then to a multiple of it (`padded_size`): a few programs serve every size.
+_QUANTUM = 1024

@@ -10,6 +10,7 @@ import numpy as np
 from jax.core import Tracer
 
 from ... import _checks
+from ..._solve.batching import solve_padded
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
 from ..._solve.sensitivity import forward_jacobian, forward_jacobian_jvp
@@ -138,7 +139,8 @@ def oblique_impact(
       `grad` the budget cannot grow and a spent one is a run-time error.
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
-    way JAX differentiates); scalars, or arrays of one shape solved under `vmap`.
+    way JAX differentiates); scalars, or arrays of one shape solved under `vmap` (padded
+    to the next power of two, so that batches of nearby sizes share one compiled program).
     """
     _check_options(rtol, max_steps)
     n_history = _checks.history_samples(n_history)
@@ -162,7 +164,10 @@ def oblique_impact(
             n_differentiable=5,
             value_and_jacobian=functools.partial(_oblique_jacobian, **options),
         )
-        return differentiable(*inputs, rtol)
+        if not flat:
+            return differentiable(*inputs, rtol, None)
+        padded = lambda *x: differentiable(*x[:-1], rtol, x[-1])
+        return solve_padded(padded, inputs, _PADDING_QUANTUM)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
     if flat:
@@ -188,12 +193,17 @@ def _of_lane(carry: Carry, lane) -> Carry:
 # 4 interleaved calls): 78 us per scenario with 256 lanes, 61-67 with 384, 106 with 512
 # (the lanes' buffers, 74 kB each at the default max_steps, then outgrow the caches).
 _LANES, _REFILL = 384, 48
+# Arrays are padded with copies to the next power of two up to this many scenarios, then to
+# a multiple of it (`padded_size`), so that a few programs serve every size; the forward
+# queue never starts the copies (the derivatives' solve does).
+_PADDING_QUANTUM = 1024
 
 
-def _solve(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x, batched):
+def _solve(mu, phi, vn, vh, friction, rtol, count, *, max_steps, n_history, n_x, batched):
     """The step loop from impact to exit: for scalars, one solve; for arrays, their
-    scenarios in the lanes of a queue, with the loop written for a batch (`batched`) or
-    for a single solve under `vmap`."""
+    scenarios in the lanes of a queue (the first `count` of them: the rest pad the batch
+    to a size already compiled), with the loop written for a batch (`batched`) or for a
+    single solve under `vmap`."""
     loop = step_loop(rtol, max_steps, batched=batched)
     start = lambda x: initial_carry(loop, *x, history=n_history > 0)
     results = functools.partial(finish, n_history=n_history, n_x=n_x)
@@ -210,6 +220,7 @@ def _solve(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x, batche
         seed_rows=1,
         lanes=_LANES,
         refill=_REFILL,
+        count=count,
     )
 
 
@@ -218,9 +229,9 @@ _STATIC = ("max_steps", "n_history", "n_x")
 
 @stored_program
 @functools.partial(jax.jit, static_argnames=_STATIC)
-def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
+def _oblique_solved(mu, phi, vn, vh, friction, rtol, count, *, max_steps, n_history, n_x):
     options = {"max_steps": max_steps, "n_history": n_history, "n_x": n_x}
-    return _solve(mu, phi, vn, vh, friction, rtol, **options, batched=mu.ndim > 0)
+    return _solve(mu, phi, vn, vh, friction, rtol, count, **options, batched=mu.ndim > 0)
 
 
 # One program for every derivative, whichever arguments carry tangents (the custom JVP of
@@ -229,10 +240,13 @@ def _oblique_solved(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_
 # (1e4 scenarios), but the loop written for a batch, differentiated, took 46 s to compile
 # for 10 scenarios against 23 s (2 cores).
 @functools.partial(jax.jit, static_argnames=_STATIC)
-def _oblique_jacobian(mu, phi, vn, vh, friction, rtol, *, max_steps, n_history, n_x):
+def _oblique_jacobian(mu, phi, vn, vh, friction, rtol, count, *, max_steps, n_history, n_x):
     options = {"max_steps": max_steps, "n_history": n_history, "n_x": n_x}
     single = functools.partial(_solve, **options, batched=False)
-    return forward_jacobian(single, (mu, phi, vn, vh, friction, rtol), n_differentiable=5)
+    # Every problem is solved, the padding's copies too: the directions are stacked as
+    # problems of their own, and the real ones are then no longer the first `count`.
+    del count
+    return forward_jacobian(single, (mu, phi, vn, vh, friction, rtol, None), n_differentiable=5)
 
 
 def moving_load(
