@@ -1,3 +1,5 @@
+import contextlib
+import logging
 import os
 
 import jax
@@ -69,3 +71,19 @@ def pytest_collection_modifyitems(items):
     waits (xdist's own order, most tests first, left 70 s between the two workers' ends)."""
     rank = {name: k for k, name in enumerate(_HEAVIEST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
+
+@pytest.fixture
+def compilations(caplog):
+    """`with compilations() as programs:` gives, once the block has run, the messages of the
+    programs XLA compiled within it ("Finished XLA compilation of jit(name) ...")."""
+
+    @contextlib.contextmanager
+    def watch():
+        programs = []
+        caplog.clear()
+        with caplog.at_level(logging.WARNING), jax.log_compiles():
+            yield programs
+        programs += [r.getMessage() for r in caplog.records if "XLA compilation" in r.getMessage()]
+
+    return watch

@@ -1,14 +1,10 @@
 """barrierjax._solve.batching: the padded batch sizes that let sweeps of nearby sizes share
 one compiled program."""
 
-import logging
-
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 
-from barrierjax import hinge
 from barrierjax._solve.batching import padded_size, solve_padded
 
 
@@ -37,23 +33,3 @@ def test_the_padded_solve_returns_the_real_rows_and_their_derivatives():
     assert out["rows"].shape == (5, 2)
     grad = jax.grad(lambda x: jnp.sum(solve_padded(solve, (x, y), 1024)["sum"] ** 2))(x)
     np.testing.assert_allclose(grad, 2 * (x + y), rtol=1e-15)
-
-
-@pytest.mark.parametrize("model", ["normal", "axial", "oblique"])
-def test_a_batch_between_two_powers_of_two_runs_the_program_of_the_larger(model, caplog):
-    """Three scenarios, then four: the four compile no program of the model (the three ran
-    at the padded size four), and each scenario is as solved alone."""
-    run = {
-        "normal": lambda mu, phi: hinge.normal_impact(mu, phi, 0.7, method="ode").damage,
-        "axial": lambda mu, phi: hinge.axial_impact(mu, phi, 0.7, 0.3).damage,
-        "oblique": lambda mu, phi: hinge.oblique_impact(mu, phi, 0.3, 0.5).exit_angle_deg,
-    }[model]
-    mu, phi = jnp.array([0.8, 2.0, 4.5, 1.3]), jnp.array([1.6, 3.0, 2.2, 5.0])
-    three = run(mu[:3], phi[:3])
-    with caplog.at_level(logging.WARNING), jax.log_compiles():
-        four = run(mu, phi)
-    compiled = [r.getMessage() for r in caplog.records if "XLA compilation" in r.getMessage()]
-    assert not [m for m in compiled if "impact" in m or "oblique" in m], compiled
-    np.testing.assert_allclose(four[:3], three, rtol=1e-13)
-    alone = [float(run(mu[k], phi[k])) for k in range(4)]
-    np.testing.assert_allclose(four, alone, rtol=1e-12)
