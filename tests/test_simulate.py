@@ -104,8 +104,8 @@ def test_axial_capacity_runs_the_axial_model():
     scene = eqx.tree_at(lambda s: s.barrier, si_scene(), barrier)
     result = bj.simulate(scene, n_history=20)
     g = bj.dimensionless(scene)
-    model = bj.hinge.axial_impact(
-        g.mass_ratio, g.force_ratio, g.normal_speed, axial_ratio=g.axial_ratio
+    model = bj.hinge.axial_impact(  # n_history as simulate's: its program, not another
+        g.mass_ratio, g.force_ratio, g.normal_speed, axial_ratio=g.axial_ratio, n_history=20
     )
     assert float(result.max_deflection) == pytest.approx(float(model.barrier_displacement * g.scales.length))
     plain = bj.simulate(si_scene(), n_history=0)
