@@ -20,6 +20,11 @@ def sorted_chunks(solve, inputs: tuple, key, batch_size: int):
     return jax.tree.map(lambda leaf: leaf[unsort], solved)
 
 
+# The quantum of the models' padded sizes: above it, a batch grows to whole multiples of it,
+# at most 255 copies; below, to a power of two (at most twice the work, on small batches).
+PADDING_QUANTUM = 256
+
+
 def padded_size(n: int, quantum: int) -> int:
     """The batch size at which `n` scenarios are solved: the next power of two up to
     `quantum`, then the next multiple of `quantum`. Sweeps of nearby sizes then run one

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 
 from ... import _checks
 from ...compilation_cache import stored_program
-from ..._solve.batching import solve_padded, sorted_chunks
+from ..._solve.batching import PADDING_QUANTUM, solve_padded, sorted_chunks
 from ..._solve.sensitivity import forward_jacobian_jvp
 from .closed_form import solve_closed_form
 from .ode import solve_ode
@@ -93,8 +93,8 @@ def normal_impact(
     With axial force (report 3.4) the model is `barrierjax.hinge.axial_impact`.
 
     Scalars, or arrays of one shape (solved in cache-sized vmapped chunks: the fastest
-    way to run a large sweep; padded with copies to the next power of two, or above a
-    chunk to the next whole chunk, so that sweeps of nearby sizes share one compiled
+    way to run a large sweep; padded with copies to the next power of two, or above 256
+    to the next multiple of 256, so that sweeps of nearby sizes share one compiled
     program); `jax.vmap` and `jax.grad` work with respect to any argument.
     """
     if method not in ("closed_form", "ode"):
@@ -110,7 +110,7 @@ def normal_impact(
     if mu.ndim == 0:
         return _normal_impact(mu, phi, speed, **options)
     chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, **options)
-    flat = solve_padded(chunked, (mu.ravel(), phi.ravel(), speed.ravel()), _CHUNK[method])
+    flat = solve_padded(chunked, (mu.ravel(), phi.ravel(), speed.ravel()), PADDING_QUANTUM)
     return jax.tree.map(lambda leaf: leaf.reshape(mu.shape + leaf.shape[1:]), flat)
 
 

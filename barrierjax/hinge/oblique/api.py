@@ -10,7 +10,7 @@ import numpy as np
 from jax.core import Tracer
 
 from ... import _checks
-from ..._solve.batching import solve_padded
+from ..._solve.batching import PADDING_QUANTUM, solve_padded
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
 from ..._solve.sensitivity import forward_jacobian, forward_jacobian_jvp
@@ -140,7 +140,9 @@ def oblique_impact(
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap` (padded
-    to the next power of two, so that batches of nearby sizes share one compiled program).
+    to the next power of two, above 256 to a multiple of 256, so that batches of nearby
+    sizes share one compiled program; the forward solve skips the copies, the
+    derivatives' solves them).
     """
     _check_options(rtol, max_steps)
     n_history = _checks.history_samples(n_history)
@@ -167,7 +169,7 @@ def oblique_impact(
         if not flat:
             return differentiable(*inputs, rtol, None)
         padded = lambda *x: differentiable(*x[:-1], rtol, x[-1])
-        return solve_padded(padded, inputs, _PADDING_QUANTUM)
+        return solve_padded(padded, inputs, PADDING_QUANTUM)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
     if flat:
@@ -193,10 +195,6 @@ def _of_lane(carry: Carry, lane) -> Carry:
 # 4 interleaved calls): 78 us per scenario with 256 lanes, 61-67 with 384, 106 with 512
 # (the lanes' buffers, 74 kB each at the default max_steps, then outgrow the caches).
 _LANES, _REFILL = 384, 48
-# Arrays are padded with copies to the next power of two up to this many scenarios, then to
-# a multiple of it (`padded_size`), so that a few programs serve every size; the forward
-# queue never starts the copies (the derivatives' solve does).
-_PADDING_QUANTUM = 1024
 
 
 def _solve(mu, phi, vn, vh, friction, rtol, count, *, max_steps, n_history, n_x, batched):
