@@ -33,3 +33,7 @@ def test_the_padded_solve_returns_the_real_rows_and_their_derivatives():
     assert out["rows"].shape == (5, 2)
     grad = jax.grad(lambda x: jnp.sum(solve_padded(solve, (x, y), 1024)["sum"] ** 2))(x)
     np.testing.assert_allclose(grad, 2 * (x + y), rtol=1e-15)
+    # Inputs of any one shape: solved flat, returned in that shape.
+    grid = solve_padded(solve, (x[:4].reshape(2, 2), y[:4].reshape(2, 2)), 1024)
+    assert calls[-1] == ((4,), 4) and grid["rows"].shape == (2, 2, 2)
+    np.testing.assert_array_equal(grid["sum"], (x[:4] + y[:4]).reshape(2, 2))

@@ -1,6 +1,7 @@
 """Solving many scenarios: in vmapped chunks, and at padded batch sizes."""
 
 import functools
+import math
 
 import jax
 import jax.numpy as jnp
@@ -37,21 +38,20 @@ def padded_size(n: int, quantum: int) -> int:
 
 
 def solve_padded(solve, inputs: tuple, quantum: int):
-    """`solve(*inputs)` for inputs of one leading axis of n scenarios, run at
-    `padded_size(n, quantum)` on inputs padded with copies of their last scenario; the
-    results of the first n are returned. `solve` is called with the padded inputs and the
+    """`solve(*inputs)` for inputs of one shape, each element a scenario: run on the
+    inputs flattened and padded with copies of their last scenario to
+    `padded_size(n, quantum)` of them, and returned for the n real ones, in the inputs'
+    shape (each leaf's leading axes). `solve` is called with the padded inputs and the
     number n of real ones, as an array (a new n is then no new program), for a solve that
     can skip the copies."""
-    n = inputs[0].shape[0]
-    size = padded_size(n, quantum)
-    count = jnp.asarray(n, jnp.int32)
-    if n == 0 or size == n:
-        return solve(*inputs, count)
-    edge = lambda a: jnp.pad(a, [(0, size - n)] + [(0, 0)] * (a.ndim - 1), mode="edge")
-    return _first(solve(*map(edge, inputs), count), n)
+    shape = inputs[0].shape
+    n = math.prod(shape)
+    copies = padded_size(n, quantum) - n if n else 0
+    padded = tuple(jnp.pad(a.ravel(), (0, copies), "edge") if copies else a.ravel() for a in inputs)
+    return _real_rows(solve(*padded, jnp.asarray(n, jnp.int32)), n, shape)
 
 
-@functools.partial(jax.jit, static_argnums=1)
-def _first(tree, n: int):
-    """The first `n` rows of every leaf: one program for the whole result."""
-    return jax.tree.map(lambda leaf: leaf[:n], tree)
+@functools.partial(jax.jit, static_argnums=(1, 2))
+def _real_rows(tree, n: int, shape: tuple):
+    """The first `n` rows of every leaf, in `shape`: one program for the whole result."""
+    return jax.tree.map(lambda leaf: leaf[:n].reshape(shape + leaf.shape[1:]), tree)

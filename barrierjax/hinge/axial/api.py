@@ -121,11 +121,9 @@ def axial_impact(
         string_cells=int(string_cells),
         string_courant=float(string_courant),
     )
-    shape = args[0].shape
-    if not shape:
+    if args[0].ndim == 0:
         return solve(*args)
-    flat = solve_padded(lambda *x: solve(*x[:-1]), tuple(a.ravel() for a in args), _CHUNK)
-    return jax.tree.map(lambda leaf: leaf.reshape(shape + leaf.shape[1:]), flat)
+    return solve_padded(lambda *x: solve(*x[:-1]), args, _CHUNK)
 
 
 # The batch is padded (`padded_size`) to the next power of two up to a chunk, then to whole
@@ -133,7 +131,6 @@ def axial_impact(
 # scenarios, in the order of mu eta0 V^2 (heavier vehicles and a larger axial term run
 # longer). One vmap over all of them ran 100 scenarios in 0.31 s and 128 in 1.07 s (a cliff
 # between 120 and 124, likely its working set outgrowing a core's 1 MB L2 cache; not
-# profiled); 1000 random ones (mu 0.1-10, phi 1.1-8,
-# V 0.2-2, eta0 0.1-5) took 21.3 s as one vmap, 4.7 s in chunks of 64, 3.4 s sorted by mu,
-# 2.3 s sorted by mu eta0 V^2 (2 cores).
+# profiled); 1000 random ones (mu 0.1-10, phi 1.1-8, V 0.2-2, eta0 0.1-5) took 21.3 s as
+# one vmap, 4.7 s in chunks of 64, 3.4 s sorted by mu, 2.3 s sorted by mu eta0 V^2 (2 cores).
 _CHUNK = 64

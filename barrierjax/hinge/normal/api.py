@@ -110,8 +110,7 @@ def normal_impact(
     if mu.ndim == 0:
         return _normal_impact(mu, phi, speed, **options)
     chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, **options)
-    flat = solve_padded(chunked, (mu.ravel(), phi.ravel(), speed.ravel()), PADDING_QUANTUM)
-    return jax.tree.map(lambda leaf: leaf.reshape(mu.shape + leaf.shape[1:]), flat)
+    return solve_padded(chunked, (mu, phi, speed), PADDING_QUANTUM)
 
 
 # Array inputs are solved in vmapped chunks of this many scenarios: a chunk's working set

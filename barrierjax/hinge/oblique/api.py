@@ -155,9 +155,8 @@ def oblique_impact(
     safe_phi = jnp.where(yields, phi, 2.0)  # keeps the discarded lanes finite
     args = jnp.broadcast_arrays(mu, safe_phi, vn, vh, friction)
     rtol = _tolerance(rtol, args[0].dtype)
-    flat = args[0].ndim > 0
     # Strongly typed: a Python number and an array of its dtype then run one program.
-    inputs = tuple(jnp.asarray(a.ravel() if flat else a, a.dtype) for a in args)
+    inputs = tuple(jnp.asarray(a, a.dtype) for a in args)
 
     def solve(budget):
         options = {"max_steps": budget, "n_history": n_history, "n_x": _N_X}
@@ -166,14 +165,12 @@ def oblique_impact(
             n_differentiable=5,
             value_and_jacobian=functools.partial(_oblique_jacobian, **options),
         )
-        if not flat:
+        if inputs[0].ndim == 0:
             return differentiable(*inputs, rtol, None)
         padded = lambda *x: differentiable(*x[:-1], rtol, x[-1])
         return solve_padded(padded, inputs, PADDING_QUANTUM)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
-    if flat:
-        result = jax.tree.map(lambda leaf: leaf.reshape(args[0].shape + leaf.shape[1:]), result)
     mu, phi, vn, vh, friction = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
     rigid = rigid_barrier(mu, phi, vn, vh, friction, n_history=n_history, n_x=_N_X)
     yields = jnp.broadcast_to(yields, mu.shape)
