@@ -171,15 +171,22 @@ def oblique_impact(
         return solve_padded(padded, inputs, PADDING_QUANTUM)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
+    return _with_rigid_barriers(result, mu, phi, vn, vh, friction, n_history=n_history)
+
+
+@functools.partial(jax.jit, static_argnames="n_history")
+def _with_rigid_barriers(solved: ObliqueImpact, mu, phi, vn, vh, friction, *, n_history):
+    """`solved` where the barrier yields (phi > 1), `rigid_barrier` elsewhere: one program
+    (op by op, each new shape compiled some 20 small ones)."""
     mu, phi, vn, vh, friction = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
     rigid = rigid_barrier(mu, phi, vn, vh, friction, n_history=n_history, n_x=_N_X)
-    yields = jnp.broadcast_to(yields, mu.shape)
+    yields = phi > 1.0
 
     def choose(solved, closed_form):
         mask = yields.reshape(yields.shape + (1,) * (solved.ndim - yields.ndim))
         return jnp.where(mask, solved, closed_form.astype(solved.dtype))
 
-    return jax.tree.map(choose, result, rigid)
+    return jax.tree.map(choose, solved, rigid)
 
 
 def _of_lane(carry: Carry, lane) -> Carry:
