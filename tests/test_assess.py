@@ -47,6 +47,21 @@ def test_constant_deceleration_closed_form(a):
     assert bool(r.impact_in_record)
 
 
+def test_records_of_one_rate_share_a_program_whatever_their_start(compilations):
+    """The start time is an argument and the step is read to 12 digits: a record that
+    starts 50 ms before contact, its times built as a linspace (whose step is not 1e-4 to
+    the last bit), runs the program of one starting at 0; its times shift by the start."""
+    a, zeros = 50.0, np.zeros_like(T)
+    at_zero = occupant_risk(T, np.full_like(T, -a), zeros)
+    shifted = np.linspace(-0.05, T[-1] - 0.05, T.size)
+    assert np.diff(shifted)[0] != DT  # float noise in the step
+    with compilations() as programs:
+        early = occupant_risk(shifted, np.full_like(T, -a), zeros)
+    assert not [m for m in programs if "_records" in m], programs
+    assert float(early.t_impact) == pytest.approx(float(at_zero.t_impact) - 0.05, rel=1e-12)
+    assert float(early.oiv_x) == float(at_zero.oiv_x)
+
+
 def test_lateral_constant_acceleration_reaches_the_side_first():
     a = 40.0  # to the left: the occupant moves right, 0.3 m at sqrt(0.6 / a)
     r = occupant_risk(T, np.zeros_like(T), np.full_like(T, a))

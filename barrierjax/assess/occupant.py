@@ -64,8 +64,8 @@ class OccupantRisk(eqx.Module):
 
 
 def sampling_step(t) -> float:
-    """The step of the uniformly sampled, concrete times `t` (ValueError naming `t` if
-    they are not)."""
+    """The step of the uniformly sampled, concrete times `t`, to 12 significant digits
+    (ValueError naming `t` if they are not uniformly sampled)."""
     if isinstance(t, Tracer):
         raise ValueError(
             "t must be concrete (not traced under jit or vmap): the step fixes the filters' "
@@ -84,18 +84,23 @@ def sampling_step(t) -> float:
         raise ValueError(
             f"t must be uniformly sampled (steps from {steps.min():g} to {steps.max():g} s)"
         )
-    return float(dt)
+    # To 12 digits (5e-13 relative at most, where uniform means within 1e-6): records of
+    # one sampling rate then share one compiled program whatever the rounding in their
+    # times (10 kHz came out as 1e-4 and as 9.999999999999999e-05).
+    return float(f"{dt:.12g}")
 
 
 @stored_program
-@functools.partial(jax.jit, static_argnames=("dt", "t0", "edition"))
-def _records(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
-    """`_one_record` over the leading axis: one executable per record length and step."""
-    one = functools.partial(_one_record, dt=dt, t0=t0, edition=edition)
-    return jax.vmap(one, in_axes=(0, 0, 0, 0, None, None))(ax, ay, yaw_rate, az, flail_x, flail_y)
+@functools.partial(jax.jit, static_argnames=("dt", "edition"))
+def _records(ax, ay, yaw_rate, az, flail_x, flail_y, t0, *, dt, edition):
+    """`_one_record` over the leading axis: one executable per record length and step
+    (the start time `t0` an argument: records that start at other times share it)."""
+    one = functools.partial(_one_record, dt=dt, edition=edition)
+    in_axes = (0, 0, 0, 0, None, None, None)
+    return jax.vmap(one, in_axes=in_axes)(ax, ay, yaw_rate, az, flail_x, flail_y, t0)
 
 
-def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, *, dt, t0, edition):
+def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, t0, *, dt, edition):
     t_impact, oiv, in_record = flail_space(ax, ay, dt, flail_x, flail_y)
     ora_x, ora_y = ridedown(ax, ay, dt, t_impact)
     if yaw_rate is None:  # the head moves as the flail-space occupant
@@ -170,8 +175,8 @@ def occupant_risk(
         flat.get("yaw_rate"),
         flat.get("az"),
         *flail,
+        jnp.asarray(t0, float),
         dt=dt,
-        t0=t0,
         edition=asi_edition,
     )
     return jax.tree.map(lambda leaf: leaf.reshape(shape[:-1]), risk)
