@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 
 from barrierjax import system
 from barrierjax.materials.plasticity import RateIndependentPlasticity
+from barrierjax.system.impact import time_grid
 from barrierjax.system.vehicle import periphery
 
 # A pickup-like vehicle (the numbers are the tests' own, not a preset's).
@@ -26,10 +27,10 @@ def _wall():
     return system.RigidWall(jnp.asarray(-20.0), jnp.asarray(80.0))
 
 
-def _rail(strength=45e3, failure=0.4, spacing=1.905):
+def _rail(strength=45e3, failure=0.4, spacing=1.905, density=7850.0):
     section = system.rail_section(1.29e-3, 1.4e-6, RateIndependentPlasticity(200e9, 345e6))
     posts = system.post_springs(1.5e6, strength, failure, 1e6, 30e3)
-    return system.guardrail(16 * spacing, spacing, section=section, density=7850.0, posts=posts,
+    return system.guardrail(16 * spacing, spacing, section=section, density=density, posts=posts,
                             anchor_stiffness=1e7, elements_per_span=4)  # fmt: skip
 
 
@@ -122,6 +123,22 @@ def test_the_stable_step_of_a_new_mesh_is_one_compiled_program(compilations):
     assert len(programs) <= 4, programs
     inside = jax.jit(lambda x: x * system.stable_step(rail, 1.5e6 * CAR["length"]))(1.0)
     assert float(inside) == dt
+
+
+def test_stable_steps_that_differ_run_one_program(compilations):
+    """The step is an argument of the compiled integrator: a denser rail (a longer stable
+    step, as many saved samples) runs the program of the first."""
+    car, light, heavy = _car(), _rail(), _rail(density=7850.0 * 1.004)
+    steps = [time_grid(car, rail, 0.1, save_every=20) for rail in (light, heavy)]
+    assert steps[0][0] < steps[1][0] and len(steps[0][1]) == len(steps[1][1])
+    run = lambda rail: system.system_impact(car, rail, speed=25.0, angle_deg=25.0,
+                                            impact_point=8.0, duration=0.1, save_every=20)  # fmt: skip
+    first = run(light)
+    with compilations() as programs:
+        second = run(heavy)
+    assert not [m for m in programs if "_integrate" in m], programs
+    np.testing.assert_allclose(np.asarray(second.history.time), steps[1][1], rtol=1e-12)
+    assert float(second.dynamic_deflection) == pytest.approx(float(first.dynamic_deflection), rel=0.05)
 
 
 def test_vmap_over_speed_and_angle_equals_the_loop():
