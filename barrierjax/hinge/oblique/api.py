@@ -171,16 +171,16 @@ def oblique_impact(
         return solve_padded(padded, inputs, PADDING_QUANTUM)
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
-    return _with_rigid_barriers(result, mu, phi, vn, vh, friction, n_history=n_history)
+    return _with_rigid_barriers(result, yields, mu, phi, vn, vh, friction, n_history=n_history)
 
 
 @functools.partial(jax.jit, static_argnames="n_history")
-def _with_rigid_barriers(solved: ObliqueImpact, mu, phi, vn, vh, friction, *, n_history):
-    """`solved` where the barrier yields (phi > 1), `rigid_barrier` elsewhere: one program
-    (op by op, each new shape compiled some 20 small ones)."""
+def _with_rigid_barriers(solved: ObliqueImpact, yields, mu, phi, vn, vh, friction, *, n_history):
+    """`solved` where the barrier `yields`, `rigid_barrier` elsewhere: one program (op by
+    op, each new shape compiled some 20 small ones)."""
     mu, phi, vn, vh, friction = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
     rigid = rigid_barrier(mu, phi, vn, vh, friction, n_history=n_history, n_x=_N_X)
-    yields = phi > 1.0
+    yields = jnp.broadcast_to(yields, mu.shape)
 
     def choose(solved, closed_form):
         mask = yields.reshape(yields.shape + (1,) * (solved.ndim - yields.ndim))
