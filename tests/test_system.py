@@ -27,11 +27,12 @@ def _wall():
     return system.RigidWall(jnp.asarray(-20.0), jnp.asarray(80.0))
 
 
-def _rail(strength=45e3, failure=0.4, spacing=1.905, density=7850.0):
+def _rail(strength=45e3, failure=0.4, spacing=1.905, density=7850.0, spans=16,
+          elements_per_span=4):  # fmt: skip
     section = system.rail_section(1.29e-3, 1.4e-6, RateIndependentPlasticity(200e9, 345e6))
     posts = system.post_springs(1.5e6, strength, failure, 1e6, 30e3)
-    return system.guardrail(16 * spacing, spacing, section=section, density=density, posts=posts,
-                            anchor_stiffness=1e7, elements_per_span=4)  # fmt: skip
+    return system.guardrail(spans * spacing, spacing, section=section, density=density, posts=posts,
+                            anchor_stiffness=1e7, elements_per_span=elements_per_span)  # fmt: skip
 
 
 def test_head_on_crush_against_a_wall_is_the_elastic_plastic_spring_in_closed_form():
@@ -114,10 +115,7 @@ def test_the_stable_step_of_a_new_mesh_is_one_compiled_program(compilations):
     """The rail's linear stiffness runs as one program per mesh (op by op, a new mesh
     compiled a few hundred small programs: 7.9 s), on concrete data also inside a
     caller's jit."""
-    section = system.rail_section(1.29e-3, 1.4e-6, RateIndependentPlasticity(200e9, 345e6))
-    posts = system.post_springs(1.5e6, 45e3, 0.4, 1e6, 30e3)
-    rail = system.guardrail(11 * 1.905, 1.905, section=section, density=7850.0, posts=posts,
-                            anchor_stiffness=1e7, elements_per_span=3)  # fmt: skip
+    rail = _rail(spans=11, elements_per_span=3)
     with compilations() as programs:  # 34 elements: a mesh no other test builds
         dt = system.stable_step(rail, 1.5e6 * CAR["length"])
     assert len(programs) <= 4, programs
@@ -131,14 +129,16 @@ def test_stable_steps_that_differ_run_one_program(compilations):
     car, light, heavy = _car(), _rail(), _rail(density=7850.0 * 1.004)
     steps = [time_grid(car, rail, 0.1, save_every=20) for rail in (light, heavy)]
     assert steps[0][0] < steps[1][0] and len(steps[0][1]) == len(steps[1][1])
-    run = lambda rail: system.system_impact(car, rail, speed=25.0, angle_deg=25.0,
-                                            impact_point=8.0, duration=0.1, save_every=20)  # fmt: skip
+    run = lambda rail: system.system_impact(
+        car, rail, speed=25.0, angle_deg=25.0, impact_point=8.0, duration=0.1, save_every=20
+    )
     first = run(light)
     with compilations() as programs:
         second = run(heavy)
     assert not [m for m in programs if "_integrate" in m], programs
     np.testing.assert_allclose(np.asarray(second.history.time), steps[1][1], rtol=1e-12)
-    assert float(second.dynamic_deflection) == pytest.approx(float(first.dynamic_deflection), rel=0.05)
+    deflections = float(second.dynamic_deflection), float(first.dynamic_deflection)
+    assert deflections[0] == pytest.approx(deflections[1], rel=0.05)
 
 
 def test_vmap_over_speed_and_angle_equals_the_loop():
