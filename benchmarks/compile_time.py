@@ -6,15 +6,20 @@ compilation and one run), the steady-state time of the same call afterwards in t
 process (the best of a few), and the process's peak resident memory. A user who calls a
 model once pays the first column; a sweep pays the second.
 
-    python benchmarks/compile_time.py [--quick] [--before PATH] [--only WORD ...]
+    python benchmarks/compile_time.py [--quick] [--before PATH] [--only WORD ...] [--jobs N]
 
 The last rows time a batch of another size after a first batch (run in the setup, not
 timed): what a second sweep of a script waits for.
 
 `--before PATH`: also run every case with the `barrierjax` package of another checkout
 (a folder holding `barrierjax/`, e.g. `git worktree add /tmp/before <commit>`), side by
-side in the table. `--only`: the cases whose label contains one of the words.
+side in the table. `--only`: the cases whose label contains one of the words. `--jobs N`:
+run N cases at a time, each in its own process (for a machine with many cores, such as a
+lent GPU's 16: the processes share the cores and the accelerator, so the times are an upper
+bound of those run one at a time).
 """
+
+from concurrent.futures import ThreadPoolExecutor
 
 from pathlib import Path
 
@@ -93,30 +98,33 @@ def cases(quick: bool) -> dict:
     return out
 
 
-def run(selected: dict, package=None, reps=3) -> list:
-    rows = []
-    for label, (setup, call) in selected.items():
+def run(selected: dict, package=None, reps=3, jobs=1) -> list:
+    def one(label: str) -> dict:
+        setup, call = selected[label]
         result = first_call(setup, call, timeout=900.0, rss_limit_gb=12.0, steady_reps=reps, package=package)
-        rows.append(dict(case=label, **result))
         print(f"  {label}: " + (f"{result['first_call_s']:.1f} s first, {result['peak_rss_mb']:.0f} MB"
                                  if result["ok"] else f"FAILED: {result['failure']}"), flush=True)
-    return rows
+        return dict(case=label, **result)
+
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        return list(pool.map(one, selected))
 
 
 def main(argv=None):
     parser = argument_parser(__doc__)
     parser.add_argument("--before", type=Path, help="a folder holding another checkout's barrierjax/")
     parser.add_argument("--only", nargs="*", default=(), help="cases whose label holds one of these words")
+    parser.add_argument("--jobs", type=int, default=1, help="cases run at a time, each in its own process")
     args = parser.parse_args(argv)
     selected = {k: v for k, v in cases(args.quick).items() if not args.only or any(w in k for w in args.only)}
     print("after (this checkout):")
-    after = run(selected, reps=1 if args.quick else 3)
+    after = run(selected, reps=1 if args.quick else 3, jobs=args.jobs)
     data = {"first_call": after}
     columns = [("case", "case", "s"), ("first call s", "first_call_s", ".1f"),
                ("steady s", "steady_s", ".2e"), ("peak RSS MB", "peak_rss_mb", ".0f")]
     if args.before:
         print(f"before ({args.before}):")
-        before = run(selected, package=args.before.resolve(), reps=1 if args.quick else 3)
+        before = run(selected, package=args.before.resolve(), reps=1 if args.quick else 3, jobs=args.jobs)
         data["before"] = before
         for row, old in zip(after, before):
             row.update(before_first_call_s=old.get("first_call_s"), before_steady_s=old.get("steady_s"),
