@@ -7,7 +7,8 @@ The report's models live in `barrierjax.materials` (chapter 2), `barrierjax.hing
 crash-test occupant risk (MASH, EN 1317) in `barrierjax.assess`.
 """
 
-from . import beam, hinge, materials
+# `_xla_flags` first: it sets XLA_FLAGS before JAX's backend starts.
+from . import _xla_flags, beam, hinge, materials  # noqa: F401
 from .scene import (
     Barrier,
     Dimensionless,

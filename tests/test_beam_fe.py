@@ -1,5 +1,10 @@
 """The incremental elastic-viscoplastic beam element of report 4.2 and the examples of 4.3."""
 
+import math
+import os
+import subprocess
+import sys
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -275,3 +280,32 @@ def test_bad_inputs_name_the_field():
         integrate(model, jnp.asarray([1e-4, -1e-4]))
     with pytest.raises(ValueError, match="duration must be positive"):
         cantilever(1.0, 2, section, RHO, tip_impulse=1.0, duration=0.0)
+
+
+_SIXTEEN_VARIANTS = """
+import math, jax, jax.numpy as jnp
+import barrierjax
+from barrierjax.beam.examples import EXAMPLES, example_model
+from barrierjax.beam.integrate import integrate
+jax.config.update("jax_enable_x64", True)
+data = EXAMPLES[1]
+dts = jnp.full(20, data["dt"] / math.ceil(data["dt"] / data["max_substep"]))
+tip = lambda s0: integrate(example_model(1, sigma0=s0), dts, scheme="damped-newmark").displacement[-1, -2]
+s0s = float(data["sigma0"]) * jnp.linspace(0.8, 1.2, 16)
+print(float(jnp.sum(jax.grad(lambda s: jax.vmap(tip)(s).sum())(s0s))))
+"""
+
+
+def test_gradient_of_sixteen_vmapped_runs_finishes():
+    """With XLA's concurrency-optimized CPU scheduler this program never finished (every
+    pool thread idle, the caller waiting; four variants did finish): barrierjax turns the
+    scheduler off (`barrierjax/_xla_flags.py`). A fresh process, so that the flag is read
+    as a user's script reads it, stopped after 240 s rather than hanging the suite."""
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    proc = subprocess.run(
+        [sys.executable, "-c", _SIXTEEN_VARIANTS], check=False, env=env, capture_output=True,
+        text=True, timeout=240,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    total = float(proc.stdout.strip().splitlines()[-1])
+    assert math.isfinite(total) and total != 0.0
