@@ -10,7 +10,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "barrierjax"
 MODULES = sorted(PACKAGE.rglob("*.py"))
 # Private modules of the package, imported whole (as diffrax does with its `_custom_types`).
-PRIVATE_MODULES = {"_checks", "_custom_types", "_solve"}
+PRIVATE_MODULES = {"_checks", "_custom_types", "_solve", "_xla_flags"}
 
 
 def module_name(path: Path) -> str:
