@@ -144,7 +144,10 @@ def numpy_flow(name, tau):
 
 
 def radau(name, tau, times, strains, rtol):
-    """scipy's Radau on the plastic strain: eps_p' = g(|sigma| - sigma0) sign(sigma) / E."""
+    """scipy's Radau on the plastic strain: eps_p' = g(|sigma| - sigma0) sign(sigma) / E,
+    one `solve_ivp` per piece of the strain history between its kinks (where the strain
+    rate changes), as a user who knows the history integrates it: stepped across the
+    ramp's end at tau 1e-7, Radau ended 2.2-2.6 sigma0 off the closed form."""
     from scipy.integrate import solve_ivp
 
     slopes = np.diff(strains) / np.diff(times)
@@ -156,10 +159,18 @@ def radau(name, tau, times, strains, rtol):
         x = abs(stress) - SIGMA0
         return [flow(x) * np.sign(stress) / E if x > 0 else 0.0]
 
+    kinks = [0, *(np.flatnonzero(np.diff(slopes) != 0.0) + 1), len(times) - 1]
+    plastic, y = [0.0], [0.0]
     with np.errstate(over="ignore", invalid="ignore"):
-        sol = solve_ivp(field, (times[0], times[-1]), [0.0], method="Radau", t_eval=times, rtol=rtol,
-                        atol=1e-6 * rtol, first_step=min(np.diff(times)) / 16)
-    return E * (strains - sol.y[0]) if sol.success else np.full_like(times, np.nan)
+        for start, end in zip(kinks[:-1], kinks[1:]):
+            sol = solve_ivp(field, (times[start], times[end]), y, method="Radau",
+                            t_eval=times[start + 1 : end + 1], rtol=rtol, atol=1e-6 * rtol,
+                            first_step=min(np.diff(times)) / 16)  # fmt: skip
+            if not sol.success:
+                return np.full_like(times, np.nan)
+            plastic.extend(sol.y[0])
+            y = [sol.y[0, -1]]
+    return E * (strains - np.asarray(plastic))
 
 
 def numpy_cowper_symonds(stress, plastic_strain, d_strain, dt, D, q, iterations):
