@@ -20,7 +20,6 @@ bound of those run one at a time).
 """
 
 from concurrent.futures import ThreadPoolExecutor
-
 from pathlib import Path
 
 from harness import argument_parser, first_call, table, write_json
