@@ -5,13 +5,18 @@ distance of the normal impact (the root of (3.2.17)).
 The iterations run on the parameters with their derivatives stopped, in a while loop that
 ends when every member (under `vmap`) has converged or the budget is spent: no derivative
 ever unrolls them. One more Newton step from the converged point x*, with the residual on
-the live parameters and the Jacobian held constant,
+the live parameters and the Jacobian J(x*) held constant,
 
     x = x* - J(x*)^-1 r(x*, theta),
 
 then carries dx/dtheta = -J^-1 dr/dtheta, the implicit function theorem's (exact at the
-root, first derivatives only). Its value reuses the last iteration's Jacobian and
-residual; the residual on the live parameters is evaluated only for a derivative.
+root, first derivatives only). The residual on the live parameters is evaluated only for a
+derivative.
+
+A factorised Jacobian may be held across iterations, and across calls (`held`): a chord
+step with it costs a residual and a back substitution where a Newton step costs a
+linearisation and a factorisation. It is kept while its steps shrink the residual fast
+(`contraction`) and refreshed at the current point as soon as one does not.
 """
 
 from collections.abc import Callable
@@ -23,86 +28,146 @@ import jax.numpy as jnp
 
 
 @eqx.filter_custom_jvp
-def _implicit_step(x_star, J, r, params, *, residual, solve):
-    """x* - J^-1 r, with r = residual(x*, params) already evaluated."""
-    return x_star - solve(J, r)
+def _implicit_step(x_star, factors, r, params, *, residual, refresh, solve):
+    """x* - J^-1 r, with r = residual(x*, params) already evaluated and J factorised; its
+    derivative takes J afresh at x* (`refresh`), exact whatever J served the step."""
+    return x_star - solve(factors, r)
 
 
 @_implicit_step.def_jvp
-def _implicit_step_jvp(primals, tangents, *, residual, solve):
-    x_star, J, r, params = primals
+def _implicit_step_jvp(primals, tangents, *, residual, refresh, solve):
+    x_star, factors, r, params = primals
     t_params = tangents[3]
-    out = _implicit_step(x_star, J, r, params, residual=residual, solve=solve)
+    out = _implicit_step(
+        x_star, factors, r, params, residual=residual, refresh=refresh, solve=solve
+    )
     if t_params is None:
         return out, None
-    _, dr = eqx.filter_jvp(lambda p: residual(x_star, p), (params,), (t_params,))
-    return out, -solve(J, dr)
+    _, dr = eqx.filter_jvp(lambda p: residual(x_star, p)[0], (params,), (t_params,))
+    return out, -solve(refresh(x_star, params), dr)
+
+
+class NewtonRoot(eqx.Module):
+    """The root, differentiable in the parameters, and the factorised Jacobian there (to
+    hold for a nearby problem, such as the next time step's)."""
+
+    root: Any
+    factors: Any
+
+
+def _once(run, body, operands):
+    """`body(operands)` where `run`, else `operands`: a while loop run once or not at all.
+    Under `vmap` it costs nothing unless some member runs it, where a `cond` would run the
+    body for every member."""
+    once = jax.lax.while_loop(lambda c: c[-1], lambda c: (*body(c[:-1]), False), (*operands, run))
+    return once[:-1]
 
 
 def newton(
     linearise: Callable[[Any, Any], tuple[Any, Any, Any]],
-    residual: Callable[[Any, Any], Any],
+    residual: Callable[[Any, Any], tuple[Any, Any]],
     solve: Callable[[Any, Any], Any],
     x0,
     params,
     *,
     iterations: int,
     halvings: int = 0,
-):
+    factor: Callable[[Any], Any] = lambda J: J,
+    held=None,
+    contraction: float = 0.0,
+    polish: float = 0.0,
+) -> NewtonRoot:
     """The root x of `residual(x, params) = 0` from `x0`, differentiable in `params`.
 
-    - `linearise(x, params)`: (J, r, converged), the Jacobian and residual at x and whether
-      x is converged (a boolean scalar; the iterations stop once it holds);
-    - `residual(x, params)`: r alone, for the line search and the derivative;
-    - `solve(J, r)`: the Newton step J^-1 r;
-    - `iterations`: the budget of Newton steps before the final one (0: the final step
-      alone, from `x0`, a single linearised solve);
+    - `linearise(x, params)`: (J, r, error), the Jacobian and residual at x and the
+      residual's size against the tolerance (a scalar: x is converged, and the iterations
+      stop, where it is at most 1);
+    - `residual(x, params)`: (r, error) alone, for the steps and the derivative;
+    - `factor(J)`: J factorised (default: J itself), and `solve(factors, r)`: the step
+      J^-1 r;
+    - `iterations`: the budget of steps before the final one (0: the final step alone,
+      from `x0`, a single linearised solve);
     - `halvings`: a backtracking line search (a nearly singular Jacobian, as at a plastic
       hinge, makes full Newton steps diverge): the full step first, halved while it does
-      not lower the residual's sum of squares, at most `halvings` times.
+      not lower the residual's sum of squares, at most `halvings` times;
+    - `held`: (factors, r0, error0), a factorised Jacobian near x0, the residual at x0
+      (or an estimate of it, with error0 = inf, which makes at least one step), from
+      which the iterations start with chord steps (default: J(x0));
+    - `contraction`: a step that shrinks the residual's norm to at most this fraction
+      keeps its Jacobian for the next step; any other step is taken with J at its start
+      (a held Jacobian whose step fails is refreshed and the step taken again), and its
+      successor too. 0: Newton's method.
+    - `polish`: the final step from a converged point takes the held Jacobian where the
+      error times the weakest contraction of its steps after the first is at most
+      `polish` (the error that predicts after the final step); from any other point it
+      linearises there.
 
-    Each iteration linearises once, at the point it steps to: that residual judges the
-    full step, and its Jacobian serves the next step (and the final one) unless the step
-    was halved, when the point reached is linearised again.
+    The final step's factors are returned, to be held for a nearby problem.
     """
     frozen = jax.lax.stop_gradient(params)
+    norm = lambda r: jnp.sqrt(jnp.sum(r**2))
+    refresh = lambda x, p: factor(linearise(x, p)[0])
 
-    def line_search(x, r, step, linearised):
-        current = jnp.sum(r**2)
+    def attempt(x, factors, r):
+        step = solve(factors, r)
+        r_new, error = residual(x - step, frozen)
+        fast = (error <= 1.0) | (norm(r_new) <= contraction * norm(r))
+        return step, r_new, error, fast
+
+    def line_search(x, r, step, r_full, error):
+        current = norm(r)
 
         def halve(search):
-            length, _, count = search
+            length, _, _, count = search
             length = 0.5 * length
-            return length, jnp.sum(residual(x - length * step, frozen) ** 2), count + 1
+            return length, *residual(x - length * step, frozen), count + 1
 
-        # (A NaN merit is not below the current one: it is halved too.)
-        no_better = lambda search: ~(search[1] < current) & (search[2] < halvings)
+        # (A NaN norm is not below the current one: it is halved too.)
+        no_better = lambda search: ~(norm(search[1]) < current) & (search[3] < halvings)
         one = jnp.ones((), r.dtype)
-        length, _, halved = jax.lax.while_loop(
-            no_better, halve, (one, jnp.sum(linearised[1] ** 2), 0)
-        )
-        # The point reached by halving is linearised in a while loop run once or not at
-        # all: under `vmap` it costs nothing unless some member halved, where a `cond`
-        # would linearise every member twice.
-        x_new, J, r_new, converged, _ = jax.lax.while_loop(
-            lambda c: c[-1],
-            lambda c: (c[0], *linearise(c[0], frozen), False),
-            (x - length * step, *linearised, halved > 0),
-        )
-        return x_new, J, r_new, converged
+        length, r_new, error, _ = jax.lax.while_loop(no_better, halve, (one, r_full, error, 0))
+        return x - length * step, r_new, error
 
     def iterate(carry):
-        x, J, r, _, count = carry
-        step = solve(J, r)
-        linearised = linearise(x - step, frozen)
-        if halvings > 0:
-            return (*line_search(x, r, step, linearised), count + 1)
-        return (x - step, *linearised, count + 1)
+        x, factors, r, _, count, current, slow, worst = carry
+
+        def refreshed_attempt(_):
+            factors = refresh(x, frozen)
+            return factors, *attempt(x, factors, r)
+
+        factors, current = _once(
+            slow & ~current, lambda _: (refresh(x, frozen), True), (factors, current)
+        )
+        step, r_new, error, fast = attempt(x, factors, r)
+        factors, step, r_new, error, fast = _once(
+            ~current & ~fast, refreshed_attempt, (factors, step, r_new, error, fast)
+        )
+        x_new, r_new, error = line_search(x, r, step, r_new, error)
+        # The first step's contraction says little of J: the start is often far off along
+        # the directions J captures best (the beam's inertia).
+        worst = jnp.where(count > 0, jnp.maximum(worst, norm(r_new) / norm(r)), worst)
+        return x_new, factors, r_new, error, count + 1, jnp.asarray(False), ~fast, worst
 
     x0 = jax.lax.stop_gradient(x0)
-    x_star, J, r, _, _ = jax.lax.while_loop(
-        lambda carry: ~carry[3] & (carry[4] < iterations),
+    if held is None:
+        J, r0, error0 = linearise(x0, frozen)
+        held, current = (factor(J), r0, error0), True
+    else:
+        current = False
+    no_step = jnp.zeros((), jnp.result_type(held[1]))
+    x_star, factors, r, error, count, _, _, worst = jax.lax.while_loop(
+        lambda carry: ~(carry[3] <= 1.0) & (carry[4] < iterations),
         iterate,
-        (x0, *linearise(x0, frozen), 0),
+        (x0, *held, 0, jnp.asarray(current), jnp.asarray(False), no_step),
     )
-    return _implicit_step(x_star, J, r, params, residual=residual, solve=solve)
+    sharp = (error <= 1.0) & (count >= 2) & (worst * error <= polish)
+
+    def relinearised(_):
+        J, r, _ = linearise(x_star, frozen)
+        return factor(J), r
+
+    factors, r = _once(~sharp, relinearised, (factors, r))
+    root = _implicit_step(
+        x_star, factors, r, params, residual=residual, refresh=refresh, solve=solve
+    )
+    return NewtonRoot(root, factors)

@@ -41,7 +41,7 @@ def _cubic(s, mu):
 
 
 def _cubic_linearised(s, mu):
-    return 3.0 * s**2 + 6.0 * mu * s - 3.0, _cubic(s, mu), jnp.asarray(False)
+    return 3.0 * s**2 + 6.0 * mu * s - 3.0, _cubic(s, mu), jnp.inf
 
 
 def _largest_root(mu):
@@ -52,12 +52,12 @@ def _largest_root(mu):
     mu >= 0. Differentiated implicitly, not through the iterations (`_solve.newton`)."""
     return newton(
         _cubic_linearised,
-        _cubic,
+        lambda s, mu: (_cubic(s, mu), jnp.inf),
         lambda slope, p: p / slope,
         jnp.full_like(mu, jnp.sqrt(3.0)),
         mu,
         iterations=7,
-    )
+    ).root
 
 
 class Decelerative(eqx.Module):
