@@ -206,6 +206,38 @@ def test_tangent_stiffness_is_the_derivative_of_the_internal_forces(shallow):
     np.testing.assert_allclose(np.asarray(K), np.asarray(reference), rtol=1e-9, atol=1e-12 * scale)
 
 
+@pytest.mark.parametrize("rate_dependent", [False, True])
+def test_held_tangents_give_newtons_answer(rate_dependent):
+    # Example 1 into its plastic hinge: Newton's tangent held from step to step (chord
+    # steps, the default) against a tangent at every iteration (chord=0).
+    model = example_model(1, rate_dependent=rate_dependent, n_elements=4, points=5)
+    dts = jnp.asarray(step_sizes(0.012, 2e-4, pulse=1e-3, pulse_steps=4))
+    runs = {
+        chord: jax.jit(lambda d, chord=chord: integrate(model, d, iterations=12, chord=chord))(dts)
+        for chord in (0.1, 0.0)
+    }
+    held, newton = runs[0.1], runs[0.0]
+    assert np.any(np.asarray(newton.plastic_strain) != 0)
+    assert float(held.residual.max()) < 1e-8 and float(newton.residual.max()) < 1e-8
+    u_held, u_newton = np.asarray(held.displacement), np.asarray(newton.displacement)
+    np.testing.assert_allclose(u_held, u_newton, rtol=0, atol=1e-8 * np.abs(u_newton).max())
+
+
+def test_step_matrix_factors_fall_back_to_lu_where_not_positive_definite():
+    from barrierjax.beam.integrate import _factor_free, _solve_factored
+
+    free = (True, False, True, True)
+    rng = np.random.default_rng(3)
+    root = rng.normal(size=(4, 4))
+    b = rng.normal(size=4)
+    kept = np.ix_([0, 2, 3], [0, 2, 3])
+    for A in (root @ root.T + 4 * np.eye(4), root + root.T):  # definite, then indefinite
+        x = np.asarray(_solve_factored(_factor_free(free, jnp.asarray(A)), jnp.asarray(b)))
+        assert x[1] == 0.0
+        np.testing.assert_allclose(x[[0, 2, 3]], np.linalg.solve(A[kept], b[[0, 2, 3]]), rtol=1e-10)
+    assert np.linalg.eigvalsh((root + root.T)[kept]).min() < 0
+
+
 def test_rate_independent_example_1_is_sensible():
     result = report_example(1, rate_dependent=False, t_end=0.004, n_elements=4, dt=5e-4)
     tip, tip_rotation, root_rotation = final_state(result)

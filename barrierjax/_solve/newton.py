@@ -55,7 +55,7 @@ class NewtonRoot(eqx.Module):
     factors: Any
 
 
-def _once(run, body, operands):
+def once(run, body, operands):
     """`body(operands)` where `run`, else `operands`: a while loop run once or not at all.
     Under `vmap` it costs nothing unless some member runs it, where a `cond` would run the
     body for every member."""
@@ -135,11 +135,11 @@ def newton(
             factors = refresh(x, frozen)
             return factors, *attempt(x, factors, r)
 
-        factors, current = _once(
+        factors, current = once(
             slow & ~current, lambda _: (refresh(x, frozen), True), (factors, current)
         )
         step, r_new, error, fast = attempt(x, factors, r)
-        factors, step, r_new, error, fast = _once(
+        factors, step, r_new, error, fast = once(
             ~current & ~fast, refreshed_attempt, (factors, step, r_new, error, fast)
         )
         x_new, r_new, error = line_search(x, r, step, r_new, error)
@@ -153,7 +153,7 @@ def newton(
         J, r0, error0 = linearise(x0, frozen)
         held, current = (factor(J), r0, error0), True
     else:
-        current = False
+        held, current = jax.lax.stop_gradient(held), False
     no_step = jnp.zeros((), jnp.result_type(held[1]))
     x_star, factors, r, error, count, _, _, worst = jax.lax.while_loop(
         lambda carry: ~(carry[3] <= 1.0) & (carry[4] < iterations),
@@ -166,7 +166,7 @@ def newton(
         J, r, _ = linearise(x_star, frozen)
         return factor(J), r
 
-    factors, r = _once(~sharp, relinearised, (factors, r))
+    factors, r = once(~sharp, relinearised, (factors, r))
     root = _implicit_step(
         x_star, factors, r, params, residual=residual, refresh=refresh, solve=solve
     )

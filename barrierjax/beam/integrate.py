@@ -51,7 +51,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import check
-from .._solve.newton import newton
+from .._solve.newton import newton, once
 from .layered import SCHEMES
 from .model import init_sections, internal_forces, load_average, mass_matrix, tangent_stiffness
 
@@ -86,34 +86,50 @@ class BeamHistory(eqx.Module):
     residual: jnp.ndarray  # (n,) relative residual of the accepted state
 
 
-def _factor_free(free, A):
-    """The LU factors of A on the free dofs (fixed rows and columns replaced by the
-    identity), with the free dofs' mask, for `_solve_factored`."""
-    mask = jnp.asarray(free)
+def _identity_on_fixed(mask, A):
+    """A with the rows and columns of the fixed dofs (`mask` False) replaced by the identity's."""
     both = mask[:, None] & mask[None, :]
-    lu, _, permutation = jax.lax.linalg.lu(jnp.where(both, A, jnp.eye(A.shape[0], dtype=A.dtype)))
-    return lu, permutation, mask
+    return jnp.where(both, A, jnp.eye(A.shape[0], dtype=A.dtype))
+
+
+def _factor_free(free, A):
+    """A on the free dofs (fixed rows and columns replaced by the identity) factorised for
+    `_solve_factored`: (lower, upper, row order, free dofs' mask). Cholesky's where A is
+    positive definite, as Newton's K + M / (beta dt^2) and the mass are at every step of the
+    report's examples (the consistent tangents are symmetric); LU's with partial pivoting
+    where it is not (Cholesky's factor then holds NaN), as past a buckling load."""
+    mask = jnp.asarray(free)
+    A = _identity_on_fixed(mask, A)
+    lower = jnp.linalg.cholesky(A, symmetrize_input=False)
+
+    def pivoted(_):
+        lu, _, order = jax.lax.linalg.lu(A)
+        return jnp.tril(lu, -1) + jnp.eye(A.shape[0], dtype=A.dtype), jnp.triu(lu), order
+
+    natural = jnp.arange(A.shape[0], dtype=jnp.int32)
+    factors = once(~jnp.all(jnp.isfinite(lower)), pivoted, (lower, lower.T, natural))
+    return (*factors, mask)
 
 
 def _solve_factored(factors, b):
     """x with A x = b on the free dofs, zero on the fixed ones, from `_factor_free`'s A."""
-    lu, permutation, mask = factors
-    x = jnp.where(mask, b, jnp.zeros_like(b))[permutation][:, None]
-    x = jax.lax.linalg.triangular_solve(lu, x, left_side=True, lower=True, unit_diagonal=True)
-    return jax.lax.linalg.triangular_solve(lu, x, left_side=True, lower=False)[:, 0]
+    lower, upper, order, mask = factors
+    x = jnp.where(mask, b, jnp.zeros_like(b))[order][:, None]
+    x = jax.lax.linalg.triangular_solve(lower, x, left_side=True, lower=True)
+    return jax.lax.linalg.triangular_solve(upper, x, left_side=True, lower=False)[:, 0]
 
 
 def _solve_free(free, A, b):
-    """Solve A x = b on the free dofs (fixed rows and columns replaced by the identity)."""
-    return _solve_factored(_factor_free(free, A), b)
+    """Solve A x = b on the free dofs (fixed rows and columns replaced by the identity),
+    differentiably (the factors' fallback is a loop, which reverse mode cannot enter)."""
+    mask = jnp.asarray(free)
+    return jnp.linalg.solve(_identity_on_fixed(mask, A), jnp.where(mask, b, jnp.zeros_like(b)))
 
 
-# Newton's Jacobian is held from step to step (`barrierjax._solve.newton`): a chord step (a
-# residual and a back substitution) that shrinks the residual to this fraction or less
-# keeps it, any other relinearises. The converged point's final step takes it where its
-# steps predict a residual below _POLISH of the tolerance after it (the polished residual
-# of Newton's own final step, which the history's `residual` reports), else J afresh.
-_CHORD_CONTRACTION = 0.25
+# The converged point's final step takes the held tangent where Newton's steps predict a
+# residual below this fraction of the tolerance after it (the polish of Newton's own final
+# step, which the history's `residual` reports: below 1e-8 in the report's examples), else
+# the tangent afresh (`barrierjax._solve.newton`).
 _POLISH = 1e-3
 
 
@@ -216,6 +232,7 @@ def integrate(
     substeps=1,
     update_mass=True,
     material_iterations=0,
+    chord=0.1,
 ):
     """Integrate the beam from rest over the steps `dts` (1-d, static length, may be traced).
 
@@ -229,7 +246,9 @@ def integrate(
     max|r| / (max|f_int| + max|F|) is at most `tolerance`; chord steps with the tangent held
     from earlier count as iterations) plus one with gradients, each with a backtracking line
     search over up to `line_search` step lengths, the full step first
-    and halved while the residual does not fall (1 = plain Newton); `substeps` equal
+    and halved while the residual does not fall (1 = plain Newton); `chord`: the held
+    tangent serves the next iteration while its steps shrink the residual to this fraction
+    or less (0: a tangent at every iteration, Newton's method); `substeps` equal
     sub-steps per step (the
     history keeps the end of each step): full Newton on backward-Euler Cowper-Symonds fibres
     diverges from the predictor when a step moves a hinge far into the viscoplastic range
@@ -250,6 +269,8 @@ def integrate(
         raise ValueError(f"gamma must be in [0.5, 1]; got {gamma!r}")
     if int(iterations) < 0:
         raise ValueError(f"iterations must be a non-negative integer; got {iterations!r}")
+    if not 0 <= chord < 1:
+        raise ValueError(f"chord must be in [0, 1); got {chord!r}")
     assert material in SCHEMES
     if material == "report" and not hasattr(model.section.law, "report_update"):
         material = "implicit"  # a rate-independent law: its return map is exact
@@ -298,7 +319,7 @@ def integrate(
             halvings=max(line_search, 1) - 1,
             factor=functools.partial(_factor_free, free),
             held=(factors, start_residual, jnp.full((), jnp.inf, dtype)),
-            contraction=_CHORD_CONTRACTION,
+            contraction=chord,
             polish=_POLISH,
         )
         u1 = solution.root
@@ -319,8 +340,9 @@ def integrate(
     stress0, state0 = init_sections(model)
     zero = jnp.zeros((), dtype)
     u0 = jnp.zeros(model.n_dofs, dtype)
-    # The first step's held Jacobian is its mass term alone (the structure at rest).
-    mass_term = mass_matrix(model, u0) / (beta * (dts[0] / substeps) ** 2)
+    # The first step's held Jacobian is its mass term alone (the structure at rest); like
+    # every held Jacobian, it serves Newton's iterations only, which carry no derivative.
+    mass_term = jax.lax.stop_gradient(mass_matrix(model, u0) / (beta * (dts[0] / substeps) ** 2))
     init = (zero, u0, u0, u0, stress0, state0, zero, _factor_free(free, mass_term.astype(dtype)))
     if substeps == 1:
         _, out = jax.lax.scan(step, init, dts.astype(dtype))
