@@ -223,7 +223,7 @@ def test_held_tangents_give_newtons_answer(rate_dependent):
     np.testing.assert_allclose(u_held, u_newton, rtol=0, atol=1e-8 * np.abs(u_newton).max())
 
 
-def test_step_matrix_factors_fall_back_to_lu_where_not_positive_definite():
+def test_held_factors_solve_on_the_free_dofs_definite_or_not():
     from barrierjax.beam.integrate import _factor_free, _solve_factored
 
     free = (True, False, True, True)

@@ -30,7 +30,8 @@ import jax.numpy as jnp
 @eqx.filter_custom_jvp
 def _implicit_step(x_star, factors, r, params, *, residual, refresh, solve):
     """x* - J^-1 r, with r = residual(x*, params) already evaluated and J factorised; its
-    derivative takes J afresh at x* (`refresh`), exact whatever J served the step."""
+    derivative takes J afresh at x* (`refresh`, where the factors may be of a J held from
+    elsewhere), exact whatever J served the step."""
     return x_star - solve(factors, r)
 
 
@@ -44,7 +45,8 @@ def _implicit_step_jvp(primals, tangents, *, residual, refresh, solve):
     if t_params is None:
         return out, None
     _, dr = eqx.filter_jvp(lambda p: residual(x_star, p)[0], (params,), (t_params,))
-    return out, -solve(refresh(x_star, params), dr)
+    exact = factors if refresh is None else refresh(x_star, params)
+    return out, -solve(exact, dr)
 
 
 class NewtonRoot(eqx.Module):
@@ -55,7 +57,7 @@ class NewtonRoot(eqx.Module):
     factors: Any
 
 
-def once(run, body, operands):
+def _once(run, body, operands):
     """`body(operands)` where `run`, else `operands`: a while loop run once or not at all.
     Under `vmap` it costs nothing unless some member runs it, where a `cond` would run the
     body for every member."""
@@ -92,11 +94,12 @@ def newton(
       not lower the residual's sum of squares, at most `halvings` times;
     - `held`: (factors, r0, error0), a factorised Jacobian near x0, the residual at x0
       (or an estimate of it, with error0 = inf, which makes at least one step), from
-      which the iterations start with chord steps (default: J(x0));
-    - `contraction`: a step that shrinks the residual's norm to at most this fraction
-      keeps its Jacobian for the next step; any other step is taken with J at its start
-      (a held Jacobian whose step fails is refreshed and the step taken again), and its
-      successor too. 0: Newton's method.
+      which the iterations start with chord steps. Without it (the default), Newton's
+      method, each iteration linearising at the point it steps to (`_newton_steps`);
+    - `contraction`: with `held`, a step that shrinks the residual's norm to at most this
+      fraction keeps its Jacobian for the next step; any other step is taken with J at
+      its start (a held Jacobian whose step fails is refreshed and the step taken again),
+      and its successor too;
     - `polish`: the final step from a converged point takes the held Jacobian where the
       error times the weakest contraction of its steps after the first is at most
       `polish` (the error that predicts after the final step); from any other point it
@@ -135,11 +138,11 @@ def newton(
             factors = refresh(x, frozen)
             return factors, *attempt(x, factors, r)
 
-        factors, current = once(
+        factors, current = _once(
             slow & ~current, lambda _: (refresh(x, frozen), True), (factors, current)
         )
         step, r_new, error, fast = attempt(x, factors, r)
-        factors, step, r_new, error, fast = once(
+        factors, step, r_new, error, fast = _once(
             ~current & ~fast, refreshed_attempt, (factors, step, r_new, error, fast)
         )
         x_new, r_new, error = line_search(x, r, step, r_new, error)
@@ -150,10 +153,8 @@ def newton(
 
     x0 = jax.lax.stop_gradient(x0)
     if held is None:
-        J, r0, error0 = linearise(x0, frozen)
-        held, current = (factor(J), r0, error0), True
-    else:
-        held, current = jax.lax.stop_gradient(held), False
+        return _newton_steps(linearise, residual, solve, factor, x0, params, iterations, halvings)
+    held, current = jax.lax.stop_gradient(held), False
     no_step = jnp.zeros((), jnp.result_type(held[1]))
     x_star, factors, r, error, count, _, _, worst = jax.lax.while_loop(
         lambda carry: ~(carry[3] <= 1.0) & (carry[4] < iterations),
@@ -166,8 +167,50 @@ def newton(
         J, r, _ = linearise(x_star, frozen)
         return factor(J), r
 
-    factors, r = once(~sharp, relinearised, (factors, r))
+    factors, r = _once(~sharp, relinearised, (factors, r))
     root = _implicit_step(
         x_star, factors, r, params, residual=residual, refresh=refresh, solve=solve
     )
+    return NewtonRoot(root, factors)
+
+
+def _newton_steps(linearise, residual, solve, factor, x0, params, iterations, halvings):
+    """`newton` without a held Jacobian: Newton's method, each iteration linearising once,
+    at the point it steps to. That residual judges the full step, and its Jacobian serves
+    the next step (and the final one, and the derivative) unless the step was halved,
+    when the point reached is linearised again."""
+    frozen = jax.lax.stop_gradient(params)
+    norm = lambda r: jnp.sqrt(jnp.sum(r**2))
+
+    def linearised(x):
+        J, r, error = linearise(x, frozen)
+        return factor(J), r, error
+
+    def line_search(x, r, step, reached):
+        def halve(search):
+            length, _, count = search
+            length = 0.5 * length
+            return length, residual(x - length * step, frozen)[0], count + 1
+
+        # (A NaN norm is not below the current one: it is halved too.)
+        no_better = lambda search: ~(norm(search[1]) < norm(r)) & (search[2] < halvings)
+        one = jnp.ones((), r.dtype)
+        length, _, halved = jax.lax.while_loop(no_better, halve, (one, reached[1], 0))
+        x_new = x - length * step
+        return x_new, *_once(halved > 0, lambda _: linearised(x_new), reached)
+
+    def iterate(carry):
+        x, factors, r, _, count = carry
+        step = solve(factors, r)
+        reached = linearised(x - step)
+        if halvings > 0:
+            return (*line_search(x, r, step, reached), count + 1)
+        return (x - step, *reached, count + 1)
+
+    x_star, factors, r, _, _ = jax.lax.while_loop(
+        lambda carry: ~(carry[3] <= 1.0) & (carry[4] < iterations),
+        iterate,
+        (x0, *linearised(x0), 0),
+    )
+    root = _implicit_step(x_star, factors, r, params, residual=residual, refresh=None, solve=solve)
     return NewtonRoot(root, factors)
