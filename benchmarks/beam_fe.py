@@ -48,6 +48,7 @@ from barrierjax.materials.plasticity import RateIndependentPlasticity
 P = opensees.EXAMPLE_1
 CONVERGED = 1e-5  # largest relative Newton residual of a converged step (`BeamHistory.residual`)
 NEWTON_LADDER = ((2, 1), (4, 1), (8, 4), (16, 8), (32, 8))  # (iterations, line_search)
+HELD_CHORD = 0.1  # `integrate(..., chord=...)` of the held-tangent runs
 
 
 def config(quick: bool) -> dict:
@@ -98,17 +99,18 @@ def top_stable_step(model, scheme="linear-acceleration"):
     return float(stable_step(omega_max, beta, gamma))
 
 
-def converged_run(model, scheme, dt, t_end, start=0) -> dict:
+def converged_run(model, scheme, dt, t_end, start=0, chord=0.0) -> dict:
     """Run `model` in equal steps of at most `dt` to `t_end` with the first `NEWTON_LADDER`
     setting (from index `start`) under which every step converges; the tip's deflections and
-    the run time after compilation."""
+    the run time after compilation. `chord` as in `integrate` (> 0: the held tangent)."""
     dts = jnp.full(math.ceil(t_end / dt - 1e-9), t_end / math.ceil(t_end / dt - 1e-9))
     row = {}
     for rung in range(start, len(NEWTON_LADDER)):
         iterations, line_search = NEWTON_LADDER[rung]
 
         def run(dts, iterations=iterations, line_search=line_search):
-            h = integrate(model, dts, scheme=scheme, iterations=iterations, line_search=line_search)
+            options = {"iterations": iterations, "line_search": line_search, "chord": chord}
+            h = integrate(model, dts, scheme=scheme, **options)
             finite = jnp.all(jnp.isfinite(h.displacement))
             return h.times, h.displacement[:, -2], h.velocity[:, -2], jnp.max(h.residual), finite
 
@@ -152,14 +154,19 @@ def against_opensees(cfg, skipped) -> list:
     for n, dt in cases(cfg):
         bj = converged_run(matched_model(n), "newmark", dt, cfg["t_end"], start=rung if n == cfg["n_elements"] else 0)
         rung = bj["rung"] if n == cfg["n_elements"] and bj["converged"] else rung
+        held = converged_run(matched_model(n), "newmark", dt, cfg["t_end"], chord=HELD_CHORD)
         row = {"n_elements": n, "dt": dt, "barrierjax": bj, "bj_rest": bj["rest_deflection"],
-                   "bj_permanent": bj["permanent_deflection"], "bj_s": bj["seconds"], "newton": f"{bj['iterations']}/{bj['line_search']}"}
+                   "bj_permanent": bj["permanent_deflection"], "bj_s": bj["seconds"], "newton": f"{bj['iterations']}/{bj['line_search']}",
+                   "held": held, "held_rest": held["rest_deflection"], "held_s": held["seconds"],
+                   "held_newton": f"{held['iterations']}/{held['line_search']}"}
         if not skipped:
             ops = opensees_run(n, dt, cfg["t_end"], repeats=3)
             (tb, wb), (to, wo) = bj.get("history", ([], [])), ops["history"]
             m = min(len(tb), len(to))
             row.update(opensees=ops, ops_rest=ops["rest_deflection"], ops_permanent=ops["permanent_deflection"],
                        ops_s=ops["seconds"], rest_difference=bj["rest_deflection"] / ops["rest_deflection"] - 1,
+                       held_rest_difference=held["rest_deflection"] / ops["rest_deflection"] - 1,
+                       speed_vs_opensees=ops["seconds"] / bj["seconds"], held_speed_vs_opensees=ops["seconds"] / held["seconds"],
                        history_difference=float(np.max(np.abs(wb[:m] - wo[:m])) / np.max(np.abs(wo[:m]))) if m else None)
         rows.append(row)
     return rows
@@ -232,6 +239,12 @@ def main(argv=None):
            ("barrierjax rest (in)", "bj_rest", ".5f"), ("perm. (in)", "bj_permanent", ".5f"), ("run s", "bj_s", ".2f"),
            ("OpenSees rest (in)", "ops_rest", ".5f"), ("perm. (in)", "ops_permanent", ".5f"), ("run s", "ops_s", ".2f"),
            ("rest diff.", "rest_difference", "+.1e"), ("history diff.", "history_difference", ".1e")])
+    table("SUMMARY: the same runs with Newton's tangent held from step to step (chord "
+          f"{HELD_CHORD}), and each barrierjax run's speed against OpenSees's", data["opensees"],
+          [("elements", "n_elements", "d"), ("dt s", "dt", ".3g"), ("Newton", "held_newton", "s"),
+           ("held rest (in)", "held_rest", ".5f"), ("rest diff.", "held_rest_difference", "+.1e"),
+           ("held run s", "held_s", ".2f"), ("OpenSees / held", "held_speed_vs_opensees", ".2f"),
+           ("OpenSees / Newton", "speed_vs_opensees", ".2f")])
     data["errors"] = error_vs_time(cfg, data["opensees"])
     table(f"Error against run time, {cfg['n_elements']} elements: rest deflection against linear acceleration at "
           f"dt {data['errors']['reference']['dt']:.3g} s; report == linear acceleration on this law: "
@@ -246,7 +259,7 @@ def main(argv=None):
            ("vmap vs single", "vmap_vs_single", ".1e")])
     data["first_call"] = first_calls(first_call_cases(cfg["first_steps"]))
     for row in data["opensees"]:
-        for code in ("barrierjax", "opensees"):
+        for code in ("barrierjax", "held", "opensees"):
             row.get(code, {}).pop("history", None)
     if not args.no_plots:
         plt = pyplot()

@@ -107,29 +107,43 @@ def newton(
 
     The final step's factors are returned, to be held for a nearby problem.
     """
+    x0 = jax.lax.stop_gradient(x0)
+    if held is None:
+        return _newton_steps(linearise, residual, solve, factor, x0, params, iterations, halvings)
+    options = {"contraction": contraction, "polish": polish, "halvings": halvings}
+    return _chord_steps(linearise, residual, solve, factor, x0, params, held, iterations, **options)
+
+
+def _norm(r):
+    return jnp.sqrt(jnp.sum(r**2))
+
+
+def _backtrack(residual, x, r, step, reached, halvings):
+    """The line search: the step's length halved from 1 while the residual (r, error) it
+    reaches, `reached` at the full step, is no smaller than r, at most `halvings` times.
+    Returns (length, r, error, halvings made). (A NaN norm is not below the current one:
+    it is halved too.)"""
+
+    def halve(search):
+        length, _, _, count = search
+        length = 0.5 * length
+        return length, *residual(x - length * step), count + 1
+
+    no_better = lambda search: ~(_norm(search[1]) < _norm(r)) & (search[3] < halvings)
+    return jax.lax.while_loop(no_better, halve, (jnp.ones((), r.dtype), *reached, 0))
+
+
+def _chord_steps(linearise, residual, solve, factor, x0, params, held, iterations, **options):
+    """`newton` from a held Jacobian (its `contraction`, `polish` and `halvings`)."""
+    contraction, polish, halvings = options["contraction"], options["polish"], options["halvings"]
     frozen = jax.lax.stop_gradient(params)
-    norm = lambda r: jnp.sqrt(jnp.sum(r**2))
     refresh = lambda x, p: factor(linearise(x, p)[0])
 
     def attempt(x, factors, r):
         step = solve(factors, r)
         r_new, error = residual(x - step, frozen)
-        fast = (error <= 1.0) | (norm(r_new) <= contraction * norm(r))
+        fast = (error <= 1.0) | (_norm(r_new) <= contraction * _norm(r))
         return step, r_new, error, fast
-
-    def line_search(x, r, step, r_full, error):
-        current = norm(r)
-
-        def halve(search):
-            length, _, _, count = search
-            length = 0.5 * length
-            return length, *residual(x - length * step, frozen), count + 1
-
-        # (A NaN norm is not below the current one: it is halved too.)
-        no_better = lambda search: ~(norm(search[1]) < current) & (search[3] < halvings)
-        one = jnp.ones((), r.dtype)
-        length, r_new, error, _ = jax.lax.while_loop(no_better, halve, (one, r_full, error, 0))
-        return x - length * step, r_new, error
 
     def iterate(carry):
         x, factors, r, _, count, current, slow, worst = carry
@@ -145,21 +159,20 @@ def newton(
         factors, step, r_new, error, fast = _once(
             ~current & ~fast, refreshed_attempt, (factors, step, r_new, error, fast)
         )
-        x_new, r_new, error = line_search(x, r, step, r_new, error)
+        at = lambda y: residual(y, frozen)
+        length, r_new, error, _ = _backtrack(at, x, r, step, (r_new, error), halvings)
         # The first step's contraction says little of J: the start is often far off along
         # the directions J captures best (the beam's inertia).
-        worst = jnp.where(count > 0, jnp.maximum(worst, norm(r_new) / norm(r)), worst)
+        worst = jnp.where(count > 0, jnp.maximum(worst, _norm(r_new) / _norm(r)), worst)
+        x_new = x - length * step
         return x_new, factors, r_new, error, count + 1, jnp.asarray(False), ~fast, worst
 
-    x0 = jax.lax.stop_gradient(x0)
-    if held is None:
-        return _newton_steps(linearise, residual, solve, factor, x0, params, iterations, halvings)
-    held, current = jax.lax.stop_gradient(held), False
-    no_step = jnp.zeros((), jnp.result_type(held[1]))
+    held = jax.lax.stop_gradient(held)
+    false, no_step = jnp.asarray(False), jnp.zeros((), jnp.result_type(held[1]))
     x_star, factors, r, error, count, _, _, worst = jax.lax.while_loop(
         lambda carry: ~(carry[3] <= 1.0) & (carry[4] < iterations),
         iterate,
-        (x0, *held, 0, jnp.asarray(current), jnp.asarray(False), no_step),
+        (x0, *held, 0, false, false, no_step),
     )
     sharp = (error <= 1.0) & (count >= 2) & (worst * error <= polish)
 
@@ -180,31 +193,21 @@ def _newton_steps(linearise, residual, solve, factor, x0, params, iterations, ha
     the next step (and the final one, and the derivative) unless the step was halved,
     when the point reached is linearised again."""
     frozen = jax.lax.stop_gradient(params)
-    norm = lambda r: jnp.sqrt(jnp.sum(r**2))
 
     def linearised(x):
         J, r, error = linearise(x, frozen)
         return factor(J), r, error
-
-    def line_search(x, r, step, reached):
-        def halve(search):
-            length, _, count = search
-            length = 0.5 * length
-            return length, residual(x - length * step, frozen)[0], count + 1
-
-        # (A NaN norm is not below the current one: it is halved too.)
-        no_better = lambda search: ~(norm(search[1]) < norm(r)) & (search[2] < halvings)
-        one = jnp.ones((), r.dtype)
-        length, _, halved = jax.lax.while_loop(no_better, halve, (one, reached[1], 0))
-        x_new = x - length * step
-        return x_new, *_once(halved > 0, lambda _: linearised(x_new), reached)
 
     def iterate(carry):
         x, factors, r, _, count = carry
         step = solve(factors, r)
         reached = linearised(x - step)
         if halvings > 0:
-            return (*line_search(x, r, step, reached), count + 1)
+            at = lambda y: residual(y, frozen)
+            length, _, _, halved = _backtrack(at, x, r, step, reached[1:], halvings)
+            x_new = x - length * step
+            reached = _once(halved > 0, lambda _: linearised(x_new), reached)
+            return (x_new, *reached, count + 1)
         return (x - step, *reached, count + 1)
 
     x_star, factors, r, _, _ = jax.lax.while_loop(

@@ -22,10 +22,13 @@ alone), more iterations converge. The iterations run on stopped gradients, then 
 step with gradients,
 u = u* - J(u*)^-1 r(u*), gives the implicit function theorem's derivative at the converged u*
 (J is held constant in it, exact at convergence): gradients never unroll the iterations.
-The factorised tangent is held from step to step and relinearised only where its steps stop
-shrinking the residual fast (`barrierjax._solve.newton`'s chord steps): most steps of an
-impact then cost residuals and back substitutions, not tangents and factorisations. The
-converged answer is the same to the tolerance, and the derivative takes J afresh at u*.
+With `chord` > 0 the factorised tangent is held from step to step and relinearised only
+where its steps stop shrinking the residual fast (`barrierjax._solve.newton`'s chord
+steps): most steps then cost residuals and back substitutions, not tangents and
+factorisations. The converged answer is the same to the tolerance, and the derivative takes
+J afresh at u*. It pays on a single rate-independent run (report Example 1 against
+OpenSees: 1.2 to 1.8 times faster), not on a rate-dependent one, whose tangent moves with
+the strain rate, nor under `vmap`, where every member refactorises when one must.
 
 Departures from the printed scheme, and why:
 - The acceleration a_n at the start of each step is recomputed from equilibrium,
