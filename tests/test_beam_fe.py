@@ -209,7 +209,7 @@ def test_tangent_stiffness_is_the_derivative_of_the_internal_forces(shallow):
 @pytest.mark.parametrize("rate_dependent", [False, True])
 def test_held_tangents_give_newtons_answer(rate_dependent):
     # Example 1 into its plastic hinge: Newton's tangent held from step to step (chord
-    # steps, the default) against a tangent at every iteration (chord=0).
+    # steps, chord=0.1) against a tangent at every iteration (chord=0, the default).
     model = example_model(1, rate_dependent=rate_dependent, n_elements=4, points=5)
     dts = jnp.asarray(step_sizes(0.012, 2e-4, pulse=1e-3, pulse_steps=4))
     runs = {
@@ -266,12 +266,13 @@ def test_vmap_equals_loop():
     np.testing.assert_allclose(np.asarray(batched), np.asarray(looped), rtol=1e-10)
 
 
-def test_gradients_match_finite_differences():
+@pytest.mark.parametrize("chord", [0.0, 0.1])
+def test_gradients_match_finite_differences(chord):
     dts = jnp.asarray(step_sizes(2e-3, 5e-4, pulse=1e-3, pulse_steps=2))
 
     def tip(p):
         model = example_model(1, n_elements=2, sigma0=p[0], tip_mass=p[1], D=p[2], q=p[3])
-        history = integrate(model, dts, scheme="damped-newmark", iterations=8)
+        history = integrate(model, dts, scheme="damped-newmark", iterations=8, chord=chord)
         return history.displacement[-1, -2]
 
     p = jnp.asarray([29000.0, 0.00381, 40.0, 5.0])
@@ -303,6 +304,8 @@ def test_bad_inputs_name_the_field():
         beam_model([[0.0, 0.0], [1.0, 0.0]], [(0, 0)], section, RHO)
     with pytest.raises(ValueError, match="n must be one of"):
         report_example(4)
+    with pytest.raises(ValueError, match=r"chord must be in \[0, 1\)"):
+        integrate(cantilever(1.0, 2, section, RHO), jnp.asarray([1e-4]), chord=1.0)
     with pytest.raises(ValueError, match="scheme must be one of"):
         report_example(1, scheme="euler")
     with pytest.raises(ValueError, match="dt must be positive"):

@@ -102,7 +102,7 @@ def newton(
       and its successor too;
     - `polish`: the final step from a converged point takes the held Jacobian where the
       error times the weakest contraction of its steps after the first is at most
-      `polish` (the error that predicts after the final step); from any other point it
+      `polish` (the error this predicts after the final step); from any other point it
       linearises there.
 
     The final step's factors are returned, to be held for a nearby problem.
@@ -110,8 +110,19 @@ def newton(
     x0 = jax.lax.stop_gradient(x0)
     if held is None:
         return _newton_steps(linearise, residual, solve, factor, x0, params, iterations, halvings)
-    options = {"contraction": contraction, "polish": polish, "halvings": halvings}
-    return _chord_steps(linearise, residual, solve, factor, x0, params, held, iterations, **options)
+    return _chord_steps(
+        linearise,
+        residual,
+        solve,
+        factor,
+        x0,
+        params,
+        held,
+        iterations,
+        halvings=halvings,
+        contraction=contraction,
+        polish=polish,
+    )
 
 
 def _norm(r):
@@ -133,9 +144,21 @@ def _backtrack(residual, x, r, step, reached, halvings):
     return jax.lax.while_loop(no_better, halve, (jnp.ones((), r.dtype), *reached, 0))
 
 
-def _chord_steps(linearise, residual, solve, factor, x0, params, held, iterations, **options):
-    """`newton` from a held Jacobian (its `contraction`, `polish` and `halvings`)."""
-    contraction, polish, halvings = options["contraction"], options["polish"], options["halvings"]
+def _chord_steps(
+    linearise,
+    residual,
+    solve,
+    factor,
+    x0,
+    params,
+    held,
+    iterations,
+    *,
+    halvings,
+    contraction,
+    polish,
+):
+    """`newton` from a held Jacobian."""
     frozen = jax.lax.stop_gradient(params)
     refresh = lambda x, p: factor(linearise(x, p)[0])
 

@@ -309,10 +309,13 @@ def integrate(
         # element's fibres at yield where the converged step is elastic) and plain Newton
         # then diverges. A line search guards the iterations near a hinge.
         params = _StepParams(model, u, predictor, start_inertia, M, F, stress, state, dt)
-        # The residual at u from the carried forces, without stepping the sections: exact
-        # for a rate-independent law, an estimate for one that relaxes over dt (so its
-        # size is not trusted: inf makes Newton take a step).
-        start_residual = equilibrium.unbalanced(params, u, f_int)
+        held = None
+        if chord:
+            # The residual at u from the carried forces, without stepping the sections:
+            # exact for a rate-independent law, an estimate for one that relaxes over dt
+            # (so its size is not trusted: inf makes Newton take a step).
+            start_residual = equilibrium.unbalanced(params, u, f_int)
+            held = (factors, start_residual, jnp.full((), jnp.inf, dtype))
         solution = newton(
             equilibrium.linearise,
             equilibrium.residual,
@@ -322,7 +325,7 @@ def integrate(
             iterations=int(iterations),
             halvings=max(line_search, 1) - 1,
             factor=factor,
-            held=(factors, start_residual, jnp.full((), jnp.inf, dtype)) if chord else None,
+            held=held,
             contraction=chord,
             polish=_POLISH,
         )
@@ -337,8 +340,7 @@ def integrate(
         if start_weight:
             v1 = v1 + dt * start_weight * a
         work = work + jnp.dot(u1 - u, F)
-        held = solution.factors if chord else factors
-        carry = (t + dt, u1, v1, f1, stress1, state1, work, held)
+        carry = (t + dt, u1, v1, f1, stress1, state1, work, solution.factors if chord else None)
         plastic = getattr(state1, "plastic_strain", None)
         return carry, (t + dt, u1, v1, N, Mom, strains, plastic, work, rel)
 
