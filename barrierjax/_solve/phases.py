@@ -23,7 +23,6 @@ class PhaseSolution(eqx.Module):
     num_steps: Int[Array, ""]
     switched: Bool[Array, ""]
     dense: diffrax.Solution | None
-    samples: PyTree[Float[Array, " ts"]] | None
 
 
 def solve_phase(
@@ -40,7 +39,6 @@ def solve_phase(
     dense: bool = False,
     max_steps: int = 4096,
     switch_required: bool = True,
-    ts=None,
 ) -> PhaseSolution:
     """Integrate `vector_field(t, y, args)` from `t0` until `switch(t, y, args)` crosses
     zero, or to `t_bound` when there is no switch.
@@ -48,8 +46,7 @@ def solve_phase(
     With a switch, `t_bound` must lie beyond it; reaching it without switching is an
     error (raised at run time with `equinox.error_if`), never a silent truncation, unless
     `switch_required` is False: the phase then ends at the first of the two, and
-    `switched` says which. With `ts` (ending at `t_bound`, and no switch), the solution
-    is also sampled there, in `samples`.
+    `switched` says which.
     """
     event = None
     if switch is not None:
@@ -68,7 +65,7 @@ def solve_phase(
         dt0=None,
         y0=y0,
         args=args,
-        saveat=diffrax.SaveAt(t1=ts is None, ts=ts, dense=dense),
+        saveat=diffrax.SaveAt(t1=True, dense=dense),
         stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
         event=event,
         max_steps=max_steps,
@@ -91,7 +88,6 @@ def solve_phase(
         num_steps=solution.stats["num_steps"],
         switched=switched,
         dense=solution if dense else None,
-        samples=None if ts is None else solution.ys,
     )
 
 
