@@ -225,7 +225,8 @@ class _Trace(eqx.Module):
 
 def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
     """Solve a beam phase again over [0, t_end], with q alongside, in `samples` - 1 equal
-    steps of `solver`. `hinge = (name, offset)`: S is offset + the state's field `name`."""
+    steps of `solver` (none where t_end is 0). `hinge = (name, offset)`: S is offset + the
+    state's field `name`."""
     name, offset = hinge
 
     def traced(t, state, args):
@@ -233,24 +234,25 @@ def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
         rates = field(t, y, args)
         return rates, rates.displacement / (offset + getattr(y, name))
 
+    h = t_end / (samples - 1)
     ts = t_end * jnp.linspace(0.0, 1.0, samples)
     solution = diffrax.diffeqsolve(
         diffrax.ODETerm(traced),
         solver,
-        t0=ts[0],
-        t1=ts[-1],
-        dt0=None,
+        t0=jnp.zeros_like(t_end),
+        t1=t_end,
+        dt0=jnp.where(t_end > 0.0, h, 1.0),
         y0=(y0, q0),
         args=args,
-        saveat=diffrax.SaveAt(t0=True, steps=True),
-        stepsize_controller=diffrax.StepTo(ts),
-        max_steps=samples - 1,
+        saveat=diffrax.SaveAt(ts=ts),
+        stepsize_controller=diffrax.ConstantStepSize(),
+        max_steps=samples,  # a last sliver of a step where rounding leaves one
         adjoint=diffrax.ForwardMode(),
     )
     y, q = solution.ys
     rates, q_rate = jax.vmap(traced, in_axes=(0, 0, None))(ts, (y, q), args)
     return _Trace(
-        h=t_end / (samples - 1),
+        h=h,
         values=jnp.stack([offset + getattr(y, name), y.displacement, q]),
         rates=jnp.stack([getattr(rates, name), rates.displacement, q_rate]),
     )
@@ -295,41 +297,23 @@ def _profile(trace: _Trace, x):
 
 def _string_start(first, second, string_in_first, p: _Params, *, cells, solver):
     """The string's initial conditions (3.4.46): the span and the velocities where N
-    reaches N0, and the displacement at the string's nodes (`_string_profile`). Where the
-    string is never reached the start is a string at rest."""
+    reaches N0, and the displacement at the string's nodes, from a second pass over the
+    beam stage (to the same ends, known only after the first) that samples S, W0 and q
+    finely enough for cubic interpolation. Where the string is never reached the passes
+    are empty and the start is a string at rest.
+
+    The second pass takes 2 equal steps of `solver` per node and phase, side by side
+    against the adaptive steps it replaced (2026-11-27): the final quantities of 64
+    random scenarios (31 reach the string) lie within 3.2e-9 of 16 steps a node, where
+    the adaptive pass at rtol 1e-8 lay 1.6e-7 off; the 64 take 67-69 ms against
+    228-231 ms, and 100 that reach the string 751 us each against 1,381. One scenario
+    that reaches the string takes longer, 3.0 ms against 1.35 (its gradient 11-15 ms
+    against 6.4-6.6). Tracing and compiling the gradient of one: 12.5-12.9 s against
+    13.4-13.8 s."""
     a, d = first.y_end, second.y_end
     reached = string_in_first | second.switched
     span = jnp.where(reached, jnp.where(string_in_first, p.s_star + a.hinge_offset, d.hinge), 1.0)
     nodes = span * jnp.arange(cells + 1, dtype=span.dtype) / cells
-    displacement = jax.lax.cond(
-        reached,
-        lambda: _string_profile(first, second, string_in_first, p, nodes, solver=solver),
-        lambda: jnp.zeros_like(nodes),
-    )
-    v_string = a.beam_velocity * jnp.exp(-second.t_end)
-    centre = jnp.where(string_in_first, a.beam_velocity, v_string)
-    vehicle = jnp.where(string_in_first, a.vehicle_velocity, v_string)
-    return reached, StringStart(
-        span=span,
-        displacement=jnp.where(reached, displacement, 0.0),
-        centre_velocity=jnp.where(reached, centre, 0.0),
-        vehicle_velocity=jnp.where(reached, vehicle, 0.0),
-    )
-
-
-def _string_profile(first, second, string_in_first, p: _Params, nodes, *, solver):
-    """The displacement at the string's `nodes` where N reaches N0 (3.4.46), from a second
-    pass over the beam stage (to the same ends, known only after the first) that samples
-    S, W0 and q finely enough for cubic interpolation.
-
-    The second pass takes 2 equal steps of `solver` per node and phase: its ends are
-    known, and fixed steps compile a smaller program than adaptive ones (tracing and
-    compiling the gradient of one scenario: 12.1 s against 14.0 s) and batch better
-    (64 scenarios: 70 ms against 314 ms; one scenario that reaches the string, 2.8 ms
-    against 1.4 ms). They are the more accurate too: over those 64 scenarios (31 reach the
-    string), the final quantities lie within 3.2e-9 of 16 steps a node, where the adaptive
-    pass at rtol 1e-8 lay 1.6e-7 off."""
-    cells = nodes.shape[0] - 1
     samples = 2 * cells + 1
     zero = jnp.zeros_like(p.mu)
     accelerating = _trace(
@@ -337,19 +321,18 @@ def _string_profile(first, second, string_in_first, p: _Params, nodes, *, solver
         ("hinge_offset", p.s_star),
         _Accelerating(zero + 1.0, zero, zero, zero, zero, zero, zero, zero),
         zero,
-        jnp.where(first.t_end > 0.0, first.t_end, 1.0),
+        jnp.where(reached, first.t_end, zero),
         p,
         samples=samples,
         solver=solver,
     )
-    in_second = ~string_in_first & (second.t_end > 0.0)
     decelerating = _trace(
         _decelerating_field,
         ("hinge", 0.0),
         _decelerating_start(first, p),
         accelerating.values[2, -1],
-        jnp.where(in_second, second.t_end, 1.0),  # a stand-in where unused (under vmap)
-        (p, first.y_end.beam_velocity),
+        jnp.where(reached & ~string_in_first, second.t_end, zero),
+        (p, a.beam_velocity),
         samples=samples,
         solver=solver,
     )
@@ -362,7 +345,15 @@ def _string_profile(first, second, string_in_first, p: _Params, nodes, *, solver
     )
     w_second = jax.vmap(_profile, in_axes=(None, 0))(decelerating, nodes)
     displacement = jnp.where(in_first, w_first + jnp.where(string_in_first, 0.0, growth), w_second)
-    return displacement.at[-1].set(0.0)
+    v_string = a.beam_velocity * jnp.exp(-second.t_end)
+    centre = jnp.where(string_in_first, a.beam_velocity, v_string)
+    vehicle = jnp.where(string_in_first, a.vehicle_velocity, v_string)
+    return reached, StringStart(
+        span=span,
+        displacement=displacement.at[-1].set(0.0),
+        centre_velocity=jnp.where(reached, centre, 0.0),
+        vehicle_velocity=jnp.where(reached, vehicle, 0.0),
+    )
 
 
 def _at_rest(second, p: _Params, v_star, rtol):
