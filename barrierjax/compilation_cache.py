@@ -37,6 +37,7 @@ import os
 import pickle
 import platform
 import tempfile
+import threading
 import warnings
 from importlib import metadata
 from pathlib import Path
@@ -91,6 +92,9 @@ def keeping_programs():
 # Where `stored_program` keeps executables (None: it is off), and those of this process.
 _programs: Path | None = None
 _loaded: dict = {}
+# One load or compilation at a time: batches solved in parts call an entry point from
+# several threads at once (`_solve.batching`), and a compilation here sets a global option.
+_loading = threading.Lock()
 
 
 def stored_program(jitted):
@@ -111,8 +115,9 @@ def stored_program(jitted):
         key = _key(jitted, args, static)
         if key is None:
             return jitted(*args, **static)
-        stored = _loaded.get(key) or _load(key) or _compile_and_store(jitted, key, args, static)
-        _loaded[key] = stored
+        with _loading:
+            stored = _loaded.get(key) or _load(key) or _compile_and_store(jitted, key, args, static)
+            _loaded[key] = stored
         executable, outputs = stored
         return jax.tree.unflatten(outputs, executable(*args))
 

@@ -1,11 +1,14 @@
 """barrierjax._solve.batching: the padded batch sizes that let sweeps of nearby sizes share
 one compiled program."""
 
+import threading
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from barrierjax._solve.batching import padded_size, solve_padded
+from barrierjax._solve import batching
+from barrierjax._solve.batching import padded_size, solve_padded, sorted_chunks
 
 
 def test_padded_sizes_are_powers_of_two_then_multiples_of_the_quantum():
@@ -37,3 +40,65 @@ def test_the_padded_solve_returns_the_real_rows_and_their_derivatives():
     grid = solve_padded(solve, (x[:4].reshape(2, 2), y[:4].reshape(2, 2)), 1024)
     assert calls[-1] == ((4,), 4) and grid["rows"].shape == (2, 2, 2)
     np.testing.assert_array_equal(grid["sum"], (x[:4] + y[:4]).reshape(2, 2))
+
+
+def _recording_solve(calls):
+    def solve(x, y, count):
+        calls.append((x.shape, int(count), threading.current_thread().name))
+        return {"sum": x + y, "rows": jnp.stack([x, 2 * y], axis=-1)}
+
+    return solve
+
+
+def test_large_concrete_batches_are_solved_in_equal_parts_from_threads(monkeypatch):
+    monkeypatch.setattr(batching, "_parts", lambda n, inputs: 3)
+    calls = []
+    x, y = jnp.arange(2500.0).reshape(50, 50), jnp.arange(2500.0).reshape(50, 50) ** 2
+    out = solve_padded(_recording_solve(calls), (x, y), 256)
+    # 834, 834 and 832 scenarios, each part padded to 1024: one program for the three.
+    assert sorted(call[:2] for call in calls) == [((1024,), 832), ((1024,), 834), ((1024,), 834)]
+    assert all(call[2].startswith("barrierjax-part") for call in calls)
+    np.testing.assert_array_equal(out["sum"], x + y)
+    np.testing.assert_array_equal(out["rows"], jnp.stack([x, 2 * y], axis=-1))
+
+
+def test_parts_follow_the_cores_and_leave_traced_inputs_whole(monkeypatch):
+    monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    x = jnp.zeros(10_000)
+    assert batching._parts(10_000, (x,)) == 2
+    assert batching._parts(2047, (x[:2047],)) == 1  # under two parts' worth
+    monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: set(range(64)), raising=False)
+    assert batching._parts(10_000, (x,)) == batching._PARTS
+    assert batching._parts(3000, (x[:3000],)) == 2
+    calls = []
+    grad = jax.grad(lambda x: jnp.sum(solve_padded(_recording_solve(calls), (x, x), 256)["sum"]))(x)
+    assert [call[:2] for call in calls] == [((10_240,), 10_000)]
+    np.testing.assert_array_equal(grad, 2.0)
+
+
+def test_the_parts_trace_with_the_callers_x64_setting(monkeypatch):
+    """jax_enable_x64 set by a context manager holds in the calling thread only: the parts'
+    threads take it from the caller."""
+    monkeypatch.setattr(batching, "_parts", lambda n, inputs: 2)
+
+    def solve(x, count):
+        return x + jnp.ones(x.shape)  # float64 where x64 is on, float32 where off
+
+    with jax.enable_x64(False):
+        x = jnp.arange(3000.0)
+        out = solve_padded(solve, (x,), 256)
+        assert out.dtype == jnp.float32 == x.dtype
+    np.testing.assert_array_equal(out, np.arange(3000.0) + 1)
+
+
+def test_sorted_chunks_are_of_one_size_and_return_the_inputs_order():
+    traces = []
+
+    def solve(x, y):
+        traces.append(x.shape)
+        return x * y
+
+    x = jnp.asarray([5.0, 1.0, 4.0, 2.0, 3.0])
+    out = sorted_chunks(solve, (x, 10 * x), key=x, batch_size=2)
+    assert traces == [()]  # the one chunk size of three (two real rows and a copy)
+    np.testing.assert_array_equal(out, 10 * x**2)

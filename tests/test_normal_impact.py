@@ -223,9 +223,10 @@ def test_property_ode_agrees_with_closed_form(mu, phi_minus_one, v0):
 
 
 def test_property_range_batched():
-    """A dense log-uniform sample of the same ranges, in one vmapped call per method."""
+    """A dense log-uniform sample of the same ranges, in one call per method: on a CPU of
+    two or more cores, in parts solved side by side (`_solve.batching.solve_padded`)."""
     rng = np.random.default_rng(0)
-    n = 400
+    n = 2400
     mu = np.exp(rng.uniform(np.log(1e-3), np.log(1e4), n))
     phi = 1.0 + np.exp(rng.uniform(np.log(1e-6), np.log(1e3 - 1), n))
     v0 = np.exp(rng.uniform(np.log(1e-4), np.log(1e2), n))
