@@ -97,19 +97,20 @@ def _rss_mb(pid: int) -> float:
 
 def first_call(
     setup: str, call: str, *, x64=True, timeout=600.0, rss_limit_gb=None, steady_reps=0,
-    package=None,
+    package=None, env=None,
 ) -> dict:
     """Run `setup` (imports and inputs: timed as `import_s`) then the expression `call`
     (waited for: `first_call_s`) in a fresh `sys.executable` with `JAX_ENABLE_X64` set to
     `x64`, and then `steady_reps` more times (the best: `steady_s`). The child is killed
     after `timeout` s or above `rss_limit_gb` resident. `package`: a folder holding another
-    checkout's `barrierjax`, imported in its place (to measure a commit against another)."""
+    checkout's `barrierjax`, imported in its place (to measure a commit against another).
+    `env`: environment variables set in the child."""
     code = _CHILD.format(
         here=str(HERE), setup=textwrap.dedent(setup).strip(), call=call, steady_reps=steady_reps
     )
     if package is not None:
         code = f"import sys; sys.path.insert(0, {str(package)!r})\n" + code
-    env = dict(os.environ, JAX_ENABLE_X64="1" if x64 else "0")
+    env = dict(os.environ, **(env or {}), JAX_ENABLE_X64="1" if x64 else "0")
     start = time.perf_counter()
     child = subprocess.Popen(
         [sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -139,13 +140,18 @@ def first_calls(cases: dict, title="First call in a fresh process", **options) -
     rows = []
     for label, (setup, call, *own) in cases.items():
         rows.append(dict(case=label, **first_call(setup, call, **{**options, **(own[0] if own else {})})))
+    first_call_table(rows, title)
+    return rows
+
+
+def first_call_table(rows: list, title="First call in a fresh process"):
+    """`first_call` rows, each with its `case`, as one table."""
     table(
         title + " (imports, then the first call: tracing + compilation + one run)",
         rows,
         [("case", "case", "s"), ("import s", "import_s", ".1f"),
          ("first call s", "first_call_s", ".1f"), ("peak RSS MB", "peak_rss_mb", ".0f")],
     )
-    return rows
 
 
 def drain():

@@ -6,6 +6,7 @@ import threading
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from barrierjax._solve import batching
 from barrierjax._solve.batching import padded_size, solve_padded, sorted_chunks
@@ -68,8 +69,17 @@ def test_parts_follow_the_cores_and_leave_traced_inputs_whole(monkeypatch):
     assert batching._parts(10_000, (x,)) == 2
     assert batching._parts(2047, (x[:2047],)) == 1  # under two parts' worth
     monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: set(range(64)), raising=False)
-    assert batching._parts(10_000, (x,)) == batching._PARTS
+    assert batching._parts(10_000, (x,)) == 8  # the most, unless BARRIERJAX_PARTS says
     assert batching._parts(3000, (x[:3000],)) == 2
+    monkeypatch.setenv("BARRIERJAX_PARTS", "3")
+    assert batching._parts(10_000, (x,)) == 3
+    monkeypatch.setenv("BARRIERJAX_PARTS", "1")
+    assert batching._parts(10_000, (x,)) == 1
+    for bad in ("0", "two", "1.5"):
+        monkeypatch.setenv("BARRIERJAX_PARTS", bad)
+        with pytest.raises(ValueError, match="BARRIERJAX_PARTS must be a whole number >= 1"):
+            batching._parts(10_000, (x,))
+    monkeypatch.delenv("BARRIERJAX_PARTS")
     calls = []
     grad = jax.grad(lambda x: jnp.sum(solve_padded(_recording_solve(calls), (x, x), 256)["sum"]))(x)
     assert [call[:2] for call in calls] == [((10_240,), 10_000)]
@@ -102,3 +112,16 @@ def test_sorted_chunks_are_of_one_size_and_return_the_inputs_order():
     out = sorted_chunks(solve, (x, 10 * x), key=x, batch_size=2)
     assert traces == [()]  # the one chunk size of three (two real rows and a copy)
     np.testing.assert_array_equal(out, 10 * x**2)
+
+
+def test_a_model_in_parts_gives_the_whole_batchs_answer(monkeypatch):
+    from barrierjax.hinge import normal_impact
+
+    monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    rng = np.random.default_rng(3)
+    mu, phi, v = (rng.uniform(lo, hi, 2100) for lo, hi in ((0.1, 10.0), (1.1, 8.0), (0.1, 1.0)))
+    parts = normal_impact(mu, phi, v)
+    monkeypatch.setenv("BARRIERJAX_PARTS", "1")
+    whole = normal_impact(mu, phi, v)
+    for a, b in zip(jax.tree.leaves(whole), jax.tree.leaves(parts), strict=True):
+        np.testing.assert_array_equal(a, b)

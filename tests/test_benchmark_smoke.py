@@ -125,3 +125,11 @@ def test_beam_fe_benchmark_quick(tmp_path):
             assert abs(row["rest_difference"]) < 0.02
     assert (data["opensees_skipped"] is None) == all("opensees" in r for r in data["opensees"])
     assert (out / "beam_fe_error_vs_time.png").stat().st_size > 0
+
+
+def test_parts_benchmark_quick(tmp_path):
+    out = tmp_path / "results"
+    data = run_quick("parts", out, 120, ("parts",))
+    (row,) = data["parts"]
+    assert row["ok"] and row["model"] == "normal, ODE" and row["n"] == 2048
+    assert row["one_us"] > 0 and row["parts_us"] > 0

@@ -56,7 +56,7 @@ def solve_padded(solve, inputs: tuple, quantum: int):
     can skip the copies.
 
     On a CPU, concrete inputs of at least `_PART_SIZE` scenarios a core are solved in
-    equal parts, as many as the process may use cores (`_PARTS` at most), each called
+    equal parts, as many as the process may use cores (`most_parts()` at most), each called
     from a thread of its own: XLA runs a program's step loop on one core, and the parts'
     programs (one program: the parts are padded alike) run side by side. Traced inputs
     (under a caller's `jit`, `vmap` or `grad`) are solved whole. The threads trace with
@@ -92,10 +92,10 @@ def _padded(inputs: tuple, size: int) -> tuple:
     return (*padded, jnp.asarray(n, jnp.int32))
 
 
-# Scenarios a part holds at least, and the most parts. 1,024 scenarios in two parts of 512
-# (2 cores): the normal ODE 5.0-5.8 -> 3.3-4.2 us a scenario, the axial model 82-88 -> 59-61,
-# the oblique queue 74 -> 67-92 (its 384 lanes then wait longer for a part's slowest);
-# 2,048 in two parts of 1,024: 5.3 -> 2.9, 129 -> 47 and 50 -> 46.
+# Scenarios a part holds at least, and the most parts (`BARRIERJAX_PARTS` sets it). 1,024
+# scenarios in two parts of 512 (2 cores): the normal ODE 5.0-5.8 -> 3.3-4.2 us a scenario,
+# the axial model 82-88 -> 59-61, the oblique queue 74 -> 67-92 (its 384 lanes then wait
+# longer for a part's slowest); 2,048 in two parts of 1,024: 5.3 -> 2.9, 129 -> 47, 50 -> 46.
 _PART_SIZE, _PARTS = 1024, 8
 
 
@@ -105,12 +105,24 @@ def _parts(n: int, inputs: tuple) -> int:
     if jax.default_backend() != "cpu" or any(isinstance(a, jax.core.Tracer) for a in inputs):
         return 1
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return max(1, min(cores or 1, _PARTS, n // _PART_SIZE))
+    return max(1, min(cores or 1, most_parts(), n // _PART_SIZE))
+
+
+def most_parts() -> int:
+    """The most parts a batch is solved in: `BARRIERJAX_PARTS` where set (1: every batch
+    whole, for a process that shares its cores with others), else `_PARTS`."""
+    chosen = os.environ.get("BARRIERJAX_PARTS", "").strip()
+    if not chosen:
+        return _PARTS
+    if not chosen.isdigit() or int(chosen) < 1:
+        raise ValueError(f"BARRIERJAX_PARTS must be a whole number >= 1; got {chosen!r}")
+    return int(chosen)
 
 
 @functools.cache
 def _pool() -> ThreadPoolExecutor:
-    return ThreadPoolExecutor(_PARTS, thread_name_prefix="barrierjax-part")
+    # (Threads that wait on nothing cost nothing: one per part, of as many as any call asks.)
+    return ThreadPoolExecutor(64, thread_name_prefix="barrierjax-part")
 
 
 @functools.partial(jax.jit, static_argnums=(1, 2))

@@ -102,8 +102,8 @@ def axial_impact(
     `string_work` the string's plastic work, and the history has `axial_force` and the
     string's profile. Scalars, or arrays of one shape (in sorted vmapped chunks of 64,
     padded with copies to the next power of two or whole chunk, so that batches of nearby
-    sizes share one compiled program); `rtol` is traced, so a new tolerance does not
-    recompile.
+    sizes share one compiled program; on a CPU, 2,048 scenarios or more in parts run side
+    by side, one a core); `rtol` is traced, so a new tolerance does not recompile.
     """
     if isinstance(axial_ratio, int | float) and axial_ratio == 0:
         return normal_impact(mass_ratio, force_ratio, speed, rtol=rtol, n_history=n_history)

@@ -95,7 +95,8 @@ def normal_impact(
     Scalars, or arrays of one shape (solved in cache-sized vmapped chunks: the fastest
     way to run a large sweep; padded with copies to the next power of two, or above 256
     to the next multiple of 256, so that sweeps of nearby sizes share one compiled
-    program); `jax.vmap` and `jax.grad` work with respect to any argument.
+    program; on a CPU, 2,048 scenarios or more in parts run side by side, one a core);
+    `jax.vmap` and `jax.grad` work with respect to any argument.
     """
     if method not in ("closed_form", "ode"):
         raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")

@@ -1,0 +1,94 @@
+"""Benchmark of large batches solved in parts, one a core (`barrierjax._solve.batching`).
+
+    python benchmarks/parts.py [--quick] [--out DIR] [--seed N] [--rounds N]
+
+A model called on concrete arrays of 2,048 scenarios or more splits them, on a CPU, into
+equal parts called from threads of their own, so that each core runs one part's program.
+Each case runs in a fresh process twice: with `BARRIERJAX_PARTS=1` (the whole batch as
+one program, as before) and as shipped (as many parts as cores, at most 8, at least 1,024
+scenarios each); the two alternate, `--rounds` times, so that the machine's drift falls on
+both. Per case: the time per scenario (the best of 5 calls after the first, in each round;
+the median over rounds), the speed-up, and each configuration's first call (tracing,
+compilation and one run) and peak memory. The scenarios are `oblique_impact.py`'s box
+(log-uniform mass ratio 0.1-10, force ratio 1.1-8, angle 5-85 degrees, speed 0.1-1; friction
+0.1-0.4 on every third); the normal models take its mass ratio, force ratio and normal
+speed; the axial model an axial ratio of 0.5. rtol 1e-6 for the three integrations.
+Writes `parts.json` to `--out`.
+"""
+
+import os
+import statistics
+
+from harness import argument_parser, first_call, first_call_table, table, write_json
+
+MODELS = {
+    "normal, closed form": "normal_impact(m, p, vn)",
+    "normal, ODE": 'normal_impact(m, p, vn, method="ode", rtol=1e-6)',
+    "axial (3.4)": "axial_impact(m, p, vn, 0.5 + 0.0 * m, rtol=1e-6)",
+    "oblique (3.3)": "oblique_impact(m, p, vn, vh, friction=f, rtol=1e-6)",
+}
+
+SETUP = """
+    import numpy as np
+    import oblique_impact as ob
+    from barrierjax.hinge import axial_impact, normal_impact, oblique_impact
+    s = ob.draw({n}, np.random.default_rng({seed}))
+    m, p, vn, vh, f = (s[k] for k in ob.INPUTS)
+"""
+
+
+def cases(quick: bool) -> list:
+    if quick:
+        return [("normal, ODE", 2048)]
+    sizes = {"normal, closed form": (10_000, 100_000), "normal, ODE": (2048, 10_000, 100_000)}
+    return [(model, n) for model in MODELS for n in sizes.get(model, (2048, 10_000))]
+
+
+def measure(model: str, n: int, seed: int, rounds: int) -> dict:
+    runs = {"one": [], "parts": []}
+    for _ in range(rounds):
+        for label, env in (("one", {"BARRIERJAX_PARTS": "1"}), ("parts", {})):
+            setup = SETUP.format(n=n, seed=seed)
+            runs[label].append(first_call(setup, MODELS[model], steady_reps=5, env=env))
+    row = {"model": model, "n": n, "cores": len(os.sched_getaffinity(0))}
+    failed = [r for rs in runs.values() for r in rs if not r["ok"]]
+    if failed:
+        return dict(row, ok=False, failure=failed[0]["failure"])
+    for label, rs in runs.items():
+        row[f"{label}_us"] = statistics.median(r["steady_s"] for r in rs) / n * 1e6
+        row[f"{label}_first_s"] = statistics.median(r["first_call_s"] for r in rs)
+        row[f"{label}_peak_mb"] = max(r["peak_rss_mb"] for r in rs)
+        row[f"{label}_runs_us"] = [r["steady_s"] / n * 1e6 for r in rs]
+    row["speedup"] = row["one_us"] / row["parts_us"]
+    return dict(row, ok=True, first_calls=runs)
+
+
+def main():
+    parser = argument_parser(__doc__)
+    parser.add_argument("--rounds", type=int, default=2, help="alternating rounds per case")
+    args = parser.parse_args()
+    rounds = 1 if args.quick else args.rounds
+    rows = [measure(model, n, args.seed, rounds) for model, n in cases(args.quick)]
+    first = [
+        dict(case=f"{r['model']}, {r['n']}, {label}", **r["first_calls"][label][0])
+        for r in rows
+        if r["ok"]
+        for label in ("one", "parts")
+    ]
+    first_call_table(first)
+    table(
+        f"SUMMARY: us a scenario, the batch whole (BARRIERJAX_PARTS=1) and in parts, "
+        f"median of {rounds} alternating fresh processes (best of 5 calls in each)",
+        rows,
+        [("model", "model", "s"), ("scenarios", "n", "d"), ("whole us", "one_us", ".2f"),
+         ("parts us", "parts_us", ".2f"), ("speed-up", "speedup", ".2f"),
+         ("first s whole / parts", "one_first_s", ".1f"), ("", "parts_first_s", ".1f"),
+         ("peak MB whole / parts", "one_peak_mb", ".0f"), ("", "parts_peak_mb", ".0f")],
+    )  # fmt: skip
+    for r in rows:
+        r.pop("first_calls", None)
+    write_json(args, "parts", {"first_call": first, "parts": rows}, rounds=rounds)
+
+
+if __name__ == "__main__":
+    main()
