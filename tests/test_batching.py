@@ -125,3 +125,19 @@ def test_a_model_in_parts_gives_the_whole_batchs_answer(monkeypatch):
     whole = normal_impact(mu, phi, v)
     for a, b in zip(jax.tree.leaves(whole), jax.tree.leaves(parts), strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_rows_in_parts_joins_the_rows_and_keeps_one_value_for_all(monkeypatch):
+    monkeypatch.setattr(batching, "_parts", lambda n, inputs: 3)
+    shapes = []
+
+    @jax.jit
+    def solve(rows):
+        shapes.append(rows.shape)
+        return {"sum": rows.sum(axis=1), "scale": jnp.asarray(2.0), "grid": jnp.ones(5)}
+
+    rows = jnp.arange(5000.0).reshape(2500, 2)
+    out = batching.rows_in_parts(solve, rows)
+    assert shapes == [(834, 2)]  # three parts, one program
+    np.testing.assert_array_equal(out["sum"], rows.sum(axis=1))
+    assert out["scale"] == 2.0 and out["grid"].shape == (5,)

@@ -142,6 +142,21 @@ def test_four_emulated_devices_give_the_rows_of_one(tmp_path):
     _assert_same_rows(four, one)
 
 
+def test_a_chunk_in_parts_on_the_cores_gives_the_rows_of_one(tmp_path, monkeypatch):
+    """A chunk of 2,100 rows solved in two parts side by side (`rows_in_parts`) against the
+    same chunk whole (`BARRIERJAX_PARTS=1`)."""
+    from barrierjax._solve import batching
+
+    monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    args = [*DEVICE_SWEEP[:-5], "--samples", "2100", "--chunk", "2100", "--no-plots"]
+    parts = tmp_path / "parts.parquet"
+    assert main([*args, "--out", str(parts)]) == 0
+    monkeypatch.setenv("BARRIERJAX_PARTS", "1")
+    whole = tmp_path / "whole.parquet"
+    assert main([*args, "--out", str(whole)]) == 0
+    _assert_same_rows(parts, whole)
+
+
 def _free_port() -> int:
     import socket
 

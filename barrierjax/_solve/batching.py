@@ -66,29 +66,56 @@ def solve_padded(solve, inputs: tuple, quantum: int):
     flat = tuple(a.ravel() for a in inputs)
     parts = _parts(n, flat)
     if parts == 1:
-        return _joined([solve(*_padded(flat, padded_size(n, quantum)))], (n,), shape)
+        size = padded_size(n, quantum)
+        return _joined([solve(*_padded(flat, size))], (n,), shape, size)
     part = -(-n // parts)
     size = padded_size(part, quantum)
-    # Each part's inputs are made here, before any part runs: made in its thread, they
-    # could wait behind another part's run.
-    arguments = jax.block_until_ready(
-        [_padded(tuple(a[k : k + part] for a in flat), size) for k in range(0, n, part)]
+    starts = range(0, n, part)
+    solved = _side_by_side(
+        solve, [_padded(tuple(a[k : k + part] for a in flat), size) for k in starts]
     )
+    return _joined(solved, tuple(min(part, n - k) for k in starts), shape, size)
+
+
+def rows_in_parts(solve, rows):
+    """`solve(rows)` (rows: an array whose leading axis holds the scenarios; `solve`: a
+    function of such an array, jitted, whose results hold one row per scenario or one value
+    for all) in equal parts side by side, as `solve_padded` runs a model's; the parts are
+    padded with copies of the last row to one shape, so that they run one program. A
+    result whose leading axis is as long as a part is taken for rows, any other for one
+    value for all."""
+    n = rows.shape[0]
+    parts = _parts(n, (rows,))
+    if parts == 1:
+        return solve(rows)
+    part = -(-n // parts)
+    starts = range(0, n, part)
+    padded = [_padded((rows[k : k + part],), part)[:1] for k in starts]
+    solved = _side_by_side(solve, padded)
+    return _joined(solved, tuple(min(part, n - k) for k in starts), (n,), part)
+
+
+def _side_by_side(solve, arguments: list) -> list:
+    """`solve(*a)` for each `a` of `arguments`, each called from a thread of its own, with
+    the caller's `jax_enable_x64`."""
+    # The arguments are made before any part runs: made in a part's thread, they could wait
+    # behind another part's run.
+    arguments = jax.block_until_ready(arguments)
     x64 = jax.config.jax_enable_x64
 
     def run(arguments):
         with jax.enable_x64(x64):
             return solve(*arguments)
 
-    solved = [future.result() for future in [_pool().submit(run, a) for a in arguments]]
-    return _joined(solved, tuple(min(part, n - k) for k in range(0, n, part)), shape)
+    return [future.result() for future in [_pool().submit(run, a) for a in arguments]]
 
 
 def _padded(inputs: tuple, size: int) -> tuple:
     """`inputs` padded to `size` rows with copies of their last, and their count."""
     n = inputs[0].shape[0]
     copies = size - n if n else 0
-    padded = tuple(jnp.pad(a, (0, copies), "edge") if copies else a for a in inputs)
+    rows = lambda a: [(0, copies)] + [(0, 0)] * (a.ndim - 1)
+    padded = tuple(jnp.pad(a, rows(a), "edge") if copies else a for a in inputs)
     return (*padded, jnp.asarray(n, jnp.int32))
 
 
@@ -125,13 +152,16 @@ def _pool() -> ThreadPoolExecutor:
     return ThreadPoolExecutor(64, thread_name_prefix="barrierjax-part")
 
 
-@functools.partial(jax.jit, static_argnums=(1, 2))
-def _joined(trees: list, counts: tuple, shape: tuple):
-    """The real rows of each part (the first `counts`), one part after another, in `shape`:
-    one program for the whole result."""
+@functools.partial(jax.jit, static_argnums=(1, 2, 3))
+def _joined(trees: list, counts: tuple, shape: tuple, rows: int):
+    """The real rows of each part (the first `counts` of each leaf whose leading axis is
+    the parts' `rows`), one part after another, in `shape`; any other leaf is one value
+    for all, the first part's. One program for the whole result."""
 
     def join(*leaves):
-        rows = jnp.concatenate([leaf[:count] for leaf, count in zip(leaves, counts)])
-        return rows.reshape(shape + rows.shape[1:])
+        if leaves[0].ndim == 0 or leaves[0].shape[0] != rows:
+            return leaves[0]
+        joined = jnp.concatenate([leaf[:count] for leaf, count in zip(leaves, counts)])
+        return joined.reshape(shape + joined.shape[1:])
 
     return jax.tree.map(join, *trees)
