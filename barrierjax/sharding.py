@@ -12,18 +12,21 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from ._solve.batching import rows_in_parts
 
 
-def sharded_batch(fn: Callable) -> Callable:
+def sharded_batch(fn: Callable, *, part_size: int | None = None) -> Callable:
     """`fn` (rows -> a pytree of arrays, one value per row or one for all) compiled with
     its rows sharded across every device of every process (`jax.sharding`; the processes
     of `jax.distributed.initialize`, each holding every row and computing its devices'
     share); returns a function of a NumPy array of rows, to NumPy arrays (the whole batch,
-    gathered to every process). One device: a plain jit, on a CPU run in parts side by side,
-    one a core, where the rows are many (`_solve.batching.rows_in_parts`). The row count
-    must be a multiple of the device count."""
+    gathered to every process). One device: a plain jit, on a CPU run in parts of at least
+    `part_size` rows (None: the models' rule) side by side, one a core
+    (`_solve.batching.rows_in_parts`). The row count must be a multiple of the device
+    count."""
     devices = jax.devices()
     if len(devices) == 1:
         compiled = jax.jit(fn)
-        return lambda values: jax.tree.map(np.asarray, rows_in_parts(compiled, jnp.asarray(values)))
+        return lambda values: jax.tree.map(
+            np.asarray, rows_in_parts(compiled, jnp.asarray(values), part_size=part_size)
+        )
     rows = NamedSharding(Mesh(np.array(devices), ("rows",)), PartitionSpec("rows"))
     compiled = jax.jit(fn, in_shardings=rows)
 

@@ -128,7 +128,7 @@ def test_a_model_in_parts_gives_the_whole_batchs_answer(monkeypatch):
 
 
 def test_rows_in_parts_joins_the_rows_and_keeps_one_value_for_all(monkeypatch):
-    monkeypatch.setattr(batching, "_parts", lambda n, inputs: 3)
+    monkeypatch.setattr(batching, "_parts", lambda n, inputs, part_size: 3)
     shapes = []
 
     @jax.jit
@@ -141,3 +141,19 @@ def test_rows_in_parts_joins_the_rows_and_keeps_one_value_for_all(monkeypatch):
     assert shapes == [(834, 2)]  # three parts, one program
     np.testing.assert_array_equal(out["sum"], rows.sum(axis=1))
     assert out["scale"] == 2.0 and out["grid"].shape == (5,)
+
+
+def test_rows_in_parts_splits_at_the_callers_part_size(monkeypatch):
+    monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    shapes = []
+
+    @jax.jit
+    def solve(rows):
+        shapes.append(rows.shape)
+        return rows[:, 0] * 2
+
+    rows = jnp.arange(128.0).reshape(64, 2)
+    whole = batching.rows_in_parts(solve, rows)  # under two parts of 1,024: whole
+    parts = batching.rows_in_parts(solve, rows, part_size=16)
+    assert shapes == [(64, 2), (32, 2)]
+    np.testing.assert_array_equal(parts, whole)

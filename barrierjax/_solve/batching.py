@@ -77,15 +77,15 @@ def solve_padded(solve, inputs: tuple, quantum: int):
     return _joined(solved, tuple(min(part, n - k) for k in starts), shape, size)
 
 
-def rows_in_parts(solve, rows):
+def rows_in_parts(solve, rows, *, part_size: int | None = None):
     """`solve(rows)` (rows: an array whose leading axis holds the scenarios; `solve`: a
     function of such an array, jitted, whose results hold one row per scenario or one value
-    for all) in equal parts side by side, as `solve_padded` runs a model's; the parts are
-    padded with copies of the last row to one shape, so that they run one program. A
-    result whose leading axis is as long as a part is taken for rows, any other for one
-    value for all."""
+    for all) in equal parts of at least `part_size` rows side by side, as `solve_padded`
+    runs a model's (None: its rule, `_PART_SIZE`); the parts are padded with copies of the
+    last row to one shape, so that they run one program. A result whose leading axis is as
+    long as a part is taken for rows, any other for one value for all."""
     n = rows.shape[0]
-    parts = _parts(n, (rows,))
+    parts = _parts(n, (rows,), part_size or _PART_SIZE)
     if parts == 1:
         return solve(rows)
     part = -(-n // parts)
@@ -126,13 +126,14 @@ def _padded(inputs: tuple, size: int) -> tuple:
 _PART_SIZE, _PARTS = 1024, 8
 
 
-def _parts(n: int, inputs: tuple) -> int:
-    """How many parts to solve `n` scenarios in: one where the inputs are traced or the
-    backend is not a CPU (an accelerator runs the whole batch at once)."""
+def _parts(n: int, inputs: tuple, part_size: int = _PART_SIZE) -> int:
+    """How many parts of at least `part_size` to solve `n` scenarios in: one where the
+    inputs are traced or the backend is not a CPU (an accelerator runs the whole batch at
+    once)."""
     if jax.default_backend() != "cpu" or any(isinstance(a, jax.core.Tracer) for a in inputs):
         return 1
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return max(1, min(cores or 1, most_parts(), n // _PART_SIZE))
+    return max(1, min(cores or 1, most_parts(), n // part_size))
 
 
 def most_parts() -> int:
