@@ -57,11 +57,11 @@ def solve_padded(solve, inputs: tuple, quantum: int):
 
     On a CPU, concrete inputs of at least `_PART_SIZE` scenarios a core are solved in
     equal parts, as many as the process may use cores (`most_parts()` at most), each called
-    from a thread of its own: within one program a second core gains XLA's runtime
-    little on a step loop, and the parts' programs (one program: the parts are padded
-    alike) run side by side. Traced inputs
-    (under a caller's `jit`, `vmap` or `grad`) are solved whole. The threads trace with
-    the caller's `jax_enable_x64`, not its other thread-local settings."""
+    from a thread of its own: within one program a second core gains XLA's runtime little
+    on a step loop, and the parts' programs (one program: the parts are padded alike) run
+    side by side. Traced inputs (under a caller's `jit`, `vmap` or `grad`) are solved
+    whole. The threads trace with the caller's `jax_enable_x64`, not its other
+    thread-local settings."""
     shape = inputs[0].shape
     n = math.prod(shape)
     flat = tuple(a.ravel() for a in inputs)
