@@ -145,3 +145,45 @@ def test_history_through_the_string_stage():
 def test_bad_string_options_name_the_field(kwargs, field):
     with pytest.raises(ValueError, match=field):
         axial_impact(0.5, 2.0, 1.0, axial_ratio=10.0, **kwargs)
+
+
+def test_the_string_start_pass_takes_diffraxs_constant_steps():
+    """The second pass over the beam stage (`stages._trace`: Tsit5's own step in a scan)
+    against `diffeqsolve` with the same constant steps, saved at the same times; and no
+    step at all where the phase has no length (the string not reached)."""
+    import diffrax
+
+    from barrierjax.hinge.axial import stages
+
+    mu, phi, eta = 0.5, 2.0, 5.0
+    p = stages._Params(
+        jnp.asarray(mu), jnp.asarray(phi), jnp.asarray(eta), 3.0 / (np.sqrt(phi**2 + 3) + phi)
+    )
+    zero = jnp.zeros(())
+    y0 = stages._Accelerating(zero + 1.0, zero, zero, zero, zero, zero, zero, zero)
+    hinge, samples, t_end = ("hinge_offset", p.s_star), 33, jnp.asarray(0.05)
+    trace = stages._trace(
+        stages._accelerating_field, hinge, y0, zero, t_end, p, samples=samples,
+        solver=diffrax.Tsit5(),
+    )  # fmt: skip
+
+    def field(t, state, args):
+        rates = stages._accelerating_field(t, state[0], args)
+        return rates, rates.displacement / (p.s_star + state[0].hinge_offset)
+
+    ts = t_end * jnp.linspace(0.0, 1.0, samples)
+    reference = diffrax.diffeqsolve(
+        diffrax.ODETerm(field), diffrax.Tsit5(), 0.0, t_end, t_end / (samples - 1), (y0, zero),
+        args=p, saveat=diffrax.SaveAt(ts=ts), stepsize_controller=diffrax.ConstantStepSize(),
+        max_steps=samples,
+    ).ys  # fmt: skip
+    expected = np.stack(
+        [p.s_star + reference[0].hinge_offset, reference[0].displacement, reference[1]]
+    )
+    assert float(jnp.max(reference[0].displacement)) > 1e-3  # the pass does move
+    np.testing.assert_allclose(trace.values, expected, rtol=1e-12, atol=1e-15)
+    still = stages._trace(
+        stages._accelerating_field, hinge, y0, zero, zero, p, samples=samples,
+        solver=diffrax.Tsit5(),
+    )  # fmt: skip
+    np.testing.assert_array_equal(still.values, np.repeat(still.values[:, :1], samples, axis=1))
