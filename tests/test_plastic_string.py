@@ -187,3 +187,8 @@ def test_the_string_start_pass_takes_diffraxs_constant_steps():
         solver=diffrax.Tsit5(),
     )  # fmt: skip
     np.testing.assert_array_equal(still.values, np.repeat(still.values[:, :1], samples, axis=1))
+    with pytest.raises(TypeError, match="explicit solver's steps; got Kvaerno5"):
+        stages._trace(
+            stages._accelerating_field, hinge, y0, zero, t_end, p, samples=samples,
+            solver=diffrax.Kvaerno5(),
+        )  # fmt: skip
