@@ -2,6 +2,7 @@
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pytest
 
 from barrierjax._solve.recorded_rk import _locate
@@ -29,3 +30,23 @@ def test_a_linear_event_is_located_with_the_implicit_function_derivative(h):
     t, dt_db = jax.jvp(lambda b: _located_time(a, b, h), (jnp.asarray(b),), (jnp.asarray(1.0),))
     assert float(t) == pytest.approx(a / b, rel=1e-14)
     assert float(dt_db) == pytest.approx(-a / b**2, rel=1e-12)
+
+
+def test_the_start_carries_tangents_from_the_inputs_and_its_values_unchanged():
+    """`_tied`, which gives the step loop's first carry the inputs' tangents (so that the
+    loop's JVP traces its body once): values kept, infinite inputs included, integers
+    untouched; the tangent of a tied constant is a function of the input's, where an
+    untied constant's is the literal zero."""
+    from barrierjax._solve.recorded_rk import _tied
+
+    tree = (jnp.asarray(2.5), jnp.asarray(3, jnp.int32), jnp.asarray(jnp.inf), jnp.ones(2))
+    out = _tied(tree, (jnp.asarray(jnp.inf), jnp.asarray(1.0)))
+    for before, after in zip(tree, out):
+        assert after.dtype == before.dtype
+        np.testing.assert_array_equal(np.asarray(after), np.asarray(before))
+
+    def linear_part(f):
+        return jax.make_jaxpr(jax.linearize(f, 1.0)[1])(1.0).jaxpr
+
+    assert linear_part(lambda x: _tied((jnp.zeros(()),), (x,))[0]).eqns
+    assert not linear_part(lambda x: jnp.zeros(())).eqns

@@ -222,6 +222,22 @@ _NEWTON_ITERATIONS = 4
 _STEP, _START, _DONE = 0, 1, 2
 
 
+def _tied(tree, inputs):
+    """`tree` with every real-valued leaf given a zero that depends on every real-valued
+    leaf of `inputs`: the same values, but under `jax.jvp` each leaf has a (symbolic)
+    tangent wherever an input has one. A while loop's JVP starts from the carries whose
+    tangents are nonzero at its start and traces the body again each time a step turns
+    another one nonzero. The oblique model's loop was traced twice, and its scalar
+    gradient took 4.5 s to trace; tied, once and 3.3 s. The zero is a select, not a
+    product, so that an infinite input cannot make it NaN."""
+    zero = jnp.zeros(())
+    for x in jax.tree.leaves(inputs):
+        if jnp.issubdtype(jnp.result_type(x), jnp.inexact):
+            zero = zero + jnp.sum(jnp.where(True, 0.0, x)).astype(zero.dtype)
+    tie = lambda x: x + zero.astype(x.dtype) if jnp.issubdtype(x.dtype, jnp.inexact) else x
+    return jax.tree.map(tie, tree)
+
+
 class Solution(eqx.Module):
     y: PyTree[Float[Array, ""]]
     derivative: PyTree[Float[Array, ""]]
@@ -287,17 +303,24 @@ class RecordedRK(eqx.Module):
     batched: bool = eqx.field(static=True, default=False)
 
     def start(self, y0, stage, recording: Recording, h0, args) -> Carry:
+        """The carry at `y0`. Its real-valued leaves that a step changes carry a tangent
+        from the start wherever `y0` or `args` carry one (`_tied`), so that `solve`'s JVP
+        traces the step once."""
         dtype = jnp.result_type(*jax.tree.leaves(y0))
         n_events = jax.eval_shape(lambda: self.event(y0, y0, stage, args)).shape[0]
         zeros = jax.tree.map(jnp.zeros_like, y0)
+        y, f, rate, h, event, stage = _tied(
+            (y0, zeros, zeros, jnp.asarray(h0, dtype), jnp.ones(n_events, dtype), stage),
+            (y0, args),
+        )
         return Carry(
-            y=y0,
-            f=zeros,
-            rate=zeros,
-            h=jnp.asarray(h0, dtype),
-            event=jnp.ones(n_events, dtype),
+            y=y,
+            f=f,
+            rate=rate,
+            h=h,
+            event=event,
             recording=recording,
-            past=self.view(y0, stage, recording, None),
+            past=self.view(y, stage, recording, None),
             stage=stage,
             args=args,
             mode=jnp.asarray(_START),
