@@ -239,10 +239,10 @@ def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
         rates = field(t, y, args)
         return rates, rates.displacement / (offset + getattr(y, name))
 
-    term = diffrax.ODETerm(traced)
     if isinstance(solver, diffrax.AbstractImplicitSolver):
         # (Its root find could fail within a step, and nothing here would see it.)
         raise TypeError(f"the string's start takes an explicit solver's steps; got {solver}")
+    term = diffrax.ODETerm(traced)
     if getattr(solver, "scan_kind", "") is None:
         # Runge-Kutta stages in a plain loop, as `diffrax.ForwardMode` has them: forward
         # derivatives cannot pass the default checkpointed one.
