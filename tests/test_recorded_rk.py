@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from barrierjax._solve.recorded_rk import _locate
+from barrierjax._solve.recorded_rk import _locate, _stored
 
 
 def _located_time(a, b, h):
@@ -50,3 +50,18 @@ def test_the_start_carries_tangents_from_the_inputs_and_its_values_unchanged():
 
     assert linear_part(lambda x: _tied((jnp.zeros(()),), (x,))[0]).eqns
     assert not linear_part(lambda x: jnp.zeros(())).eqns
+
+
+@pytest.mark.parametrize("h", [0.0, 3e-7, 2.5, np.inf])
+def test_stored_values_and_tangents_are_unchanged(h):
+    """`_stored`, the division by a one that XLA cannot see through: every value to the
+    bit (signed zeros and infinities included) and the tangents too. (Not subnormals: XLA's
+    CPU kernels flush them to zero, in this division as in any other arithmetic.)"""
+    values = jnp.asarray([0.0, -0.0, 2.3e-308, -1.7e308, 1.0 / 3.0, np.inf, -np.inf])
+    stored = _stored((values, {"x": values[4]}), jnp.asarray(h))
+    np.testing.assert_array_equal(np.asarray(stored[0]), np.asarray(values))
+    assert np.signbit(np.asarray(stored[0])).tolist() == np.signbit(np.asarray(values)).tolist()
+    assert float(stored[1]["x"]) == float(values[4])
+    direction = jnp.arange(7.0) / 3.0
+    _, tangent = jax.jvp(lambda v: _stored(v, jnp.asarray(h)), (values,), (direction,))
+    np.testing.assert_array_equal(np.asarray(tangent), np.asarray(direction))
