@@ -1,6 +1,6 @@
 """Benchmark of large batches solved in parts, one a core (`barrierjax._solve.batching`).
 
-    python benchmarks/parts.py [--quick] [--out DIR] [--seed N] [--rounds N]
+    python benchmarks/parts.py [--quick] [--out DIR] [--seed N] [--rounds N] [--only WORD ...]
 
 A model called on concrete arrays of 2,048 scenarios or more splits them, on a CPU, into
 equal parts called from threads of their own, so that each core runs one part's program.
@@ -13,7 +13,10 @@ compilation and one run) and peak memory. The scenarios are `oblique_impact.py`'
 (log-uniform mass ratio 0.1-10, force ratio 1.1-8, angle 5-85 degrees, speed 0.1-1; friction
 0.1-0.4 on every third); the normal models take its mass ratio, force ratio and normal
 speed; the axial model an axial ratio of 0.5. rtol 1e-6 for the three integrations.
-Writes `parts.json` to `--out`.
+`--only`: the cases whose label ("model, scenarios", e.g. "oblique (3.3), 10000") holds one
+of the words. Where the oblique model and the normal ODE ran on the same scenarios, their
+ratio per scenario (issue 28's sweep criterion) closes the summary. Writes `parts.json` to
+`--out`.
 """
 
 import os
@@ -66,9 +69,13 @@ def measure(model: str, n: int, seed: int, rounds: int) -> dict:
 def main():
     parser = argument_parser(__doc__)
     parser.add_argument("--rounds", type=int, default=2, help="alternating rounds per case")
+    parser.add_argument("--only", nargs="*", default=(), help="cases whose label holds one of these words")
     args = parser.parse_args()
     rounds = 1 if args.quick else args.rounds
-    rows = [measure(model, n, args.seed, rounds) for model, n in cases(args.quick)]
+    selected = [
+        (model, n) for model, n in cases(args.quick) if not args.only or any(w in f"{model}, {n}" for w in args.only)
+    ]
+    rows = [measure(model, n, args.seed, rounds) for model, n in selected]
     first = [
         dict(case=f"{r['model']}, {r['n']}, {label}", **r["first_calls"][label][0])
         for r in rows
@@ -85,6 +92,12 @@ def main():
          ("first s whole / parts", "one_first_s", ".1f"), ("", "parts_first_s", ".1f"),
          ("peak MB whole / parts", "one_peak_mb", ".0f"), ("", "parts_peak_mb", ".0f")],
     )  # fmt: skip
+    ode = {r["n"]: r for r in rows if r["ok"] and r["model"] == "normal, ODE"}
+    for r in rows:
+        if r["ok"] and r["model"] == "oblique (3.3)" and r["n"] in ode:
+            r["over_normal_ode"] = {k: r[f"{k}_us"] / ode[r["n"]][f"{k}_us"] for k in ("one", "parts")}
+            print(f"oblique / normal ODE per scenario at {r['n']}: whole {r['over_normal_ode']['one']:.2f}, "
+                  f"in parts {r['over_normal_ode']['parts']:.2f}")
     for r in rows:
         r.pop("first_calls", None)
     write_json(args, "parts", {"first_call": first, "parts": rows}, rounds=rounds)
