@@ -134,7 +134,8 @@ def _step(vector, y, f0, h, unroll):
     """One Dormand-Prince step of length `h` from `y`, where the field is `f0`: (the
     solution, its error estimate, the field there). The six stages run in a loop, which
     traces and compiles the vector field once, or with `unroll` are written out, each
-    stage's point and field stored (`_stored`)."""
+    stage's point and the step's end and error stored (`_stored`; the caller that writes
+    the stages out stores the field's values too)."""
     if unroll:
         ks = [f0]
         for a in _A[1:]:
