@@ -125,21 +125,21 @@ def _stored(tree, h):
     each stage's field into the kernels of every later stage: the oblique model's step,
     optimised, held 7,247 products, more than its jaxpr's 6,050. A division is expensive
     to XLA, so it is computed once and its result stored and read: 3,885 products, and a
-    step 12-15 % faster (benchmarks/README.md). Exact: x / 1.0 is x."""
+    step 12-15 % faster (benchmarks/README.md). Exact: x / 1.0 is x. Used on a CPU only:
+    on a GPU, where XLA fuses otherwise, its effect was not measured."""
     one = jnp.maximum(jnp.sign(jnp.abs(h)), 1.0)
     return jax.tree.map(lambda x: x / one, tree)
 
 
-def _step(vector, y, f0, h, unroll):
+def _step(vector, y, f0, h, unroll, hold=lambda tree: tree):
     """One Dormand-Prince step of length `h` from `y`, where the field is `f0`: (the
     solution, its error estimate, the field there). The six stages run in a loop, which
     traces and compiles the vector field once, or with `unroll` are written out, each
-    stage's point and the step's end and error stored (`_stored`; the caller that writes
-    the stages out stores the field's values too)."""
+    stage's point and the step's end and error passed through `hold` (`_stored`, say)."""
     if unroll:
         ks = [f0]
         for a in _A[1:]:
-            ks.append(vector(_stored(_combine(y, h, a, ks), h)))
+            ks.append(vector(hold(_combine(y, h, a, ks))))
     else:
         a = jnp.asarray([row + [0.0] * (7 - len(row)) for row in _A], jnp.result_type(h))
 
@@ -156,7 +156,7 @@ def _step(vector, y, f0, h, unroll):
     y1 = _combine(y, h, _A[6], ks[:6])
     error = _combine(jax.tree.map(jnp.zeros_like, y), h, _B_ERROR, ks)
     if unroll:
-        y1, error = _stored((y1, error), h)
+        y1, error = hold((y1, error))
     return y1, error, ks[6]
 
 
@@ -384,12 +384,14 @@ class RecordedRK(eqx.Module):
             flat = lambda x: jax.flatten_util.ravel_pytree(x)[0]
             state = jax.flatten_util.ravel_pytree(y)[1]
         vector = lambda x: flat(self.field(state(x), stage, past, args))
-        if self.batched:
+        hold = lambda tree: tree
+        if self.batched and jax.default_backend() == "cpu":
+            hold = lambda tree: _stored(tree, length)
             # (Its JVP, the rate below, is stored too: the tangent is divided by the same one.)
-            vector = lambda x, field=vector: _stored(field(x), length)
+            vector = lambda x, field=vector: hold(field(x))
         event = lambda x, fx: self.event(state(x), state(fx), stage, args)
         y, f, r = flat(y), flat(f), flat(r)
-        y1, error, f1 = _step(vector, y, f, length, unroll=self.batched)
+        y1, error, f1 = _step(vector, y, f, length, unroll=self.batched, hold=hold)
         # Only the entries `record` reads of the rate survive dead-code elimination.
         r1 = jax.jvp(vector, (y1,), (f1,))[1]
         e1 = event(y1, f1)
