@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from barrierjax._solve.recorded_rk import _locate, _stored
+from barrierjax._solve.recorded_rk import _locate, _stored, _tied
 
 
 def _located_time(a, b, h):
@@ -37,8 +37,6 @@ def test_the_start_carries_tangents_from_the_inputs_and_its_values_unchanged():
     loop's JVP traces its body once): values kept, infinite inputs included, integers
     untouched; the tangent of a tied constant is a function of the input's, where an
     untied constant's is the literal zero."""
-    from barrierjax._solve.recorded_rk import _tied
-
     tree = (jnp.asarray(2.5), jnp.asarray(3, jnp.int32), jnp.asarray(jnp.inf), jnp.ones(2))
     out = _tied(tree, (jnp.asarray(jnp.inf), jnp.asarray(1.0)))
     for before, after in zip(tree, out):
