@@ -160,6 +160,16 @@ def test_histories_are_physical(method):
     assert np.array_equal(np.asarray(h.vehicle_velocity[n:]), np.asarray(h.barrier_velocity[n:]))
 
 
+def test_a_new_tolerance_runs_the_same_program(compilations):
+    loose = normal_impact(1.0, 2.0, 0.7, method="ode", rtol=1e-4)
+    with compilations() as programs:
+        tight = normal_impact(1.0, 2.0, 0.7, method="ode", rtol=1e-10)
+    assert not [m for m in programs if "normal_impact" in m], programs
+    # The tolerance reaches the solver: the tighter run is the closer to the closed form.
+    exact = float(normal_impact(1.0, 2.0, 0.7, rtol=1e-12).duration)
+    assert abs(float(tight.duration) - exact) < 1e-3 * abs(float(loose.duration) - exact)
+
+
 # --- Batches and gradients. ---
 
 

@@ -11,22 +11,30 @@ from ... import _checks
 from ...compilation_cache import stored_program
 from ..._solve.batching import PADDING_QUANTUM, solve_padded, sorted_chunks
 from ..._solve.sensitivity import forward_jacobian_jvp
-from .closed_form import solve_closed_form
+from .closed_form import quadrature_points, solve_closed_form
 from .ode import solve_ode
 from .results import NormalImpact, finish_history, normal_result, rigid_barrier
 
 
+_STATIC = ("method", "points", "n_history", "solver")
+
+
 @stored_program
-@functools.partial(jax.jit, static_argnames=("method", "rtol", "n_history", "solver"))
-def _normal_impact(mu, phi, speed, *, method, rtol, n_history, solver):
+@functools.partial(jax.jit, static_argnames=_STATIC)
+def _normal_impact(mu, phi, speed, rtol, *, method, points, n_history, solver):
+    """`rtol` is traced: the ODE at a new tolerance does not recompile. The closed form
+    depends on it only through its number of quadrature nodes, `points` (None for the
+    ODE)."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)  # keeps the unused branch finite for gradients
     if method == "closed_form":
-        acc, final, raw = solve_closed_form(mu, safe_phi, rtol=rtol, n_history=n_history)
+        acc, final, raw = solve_closed_form(mu, safe_phi, points=points, n_history=n_history)
         damage = 0.5 * acc.t_star
     else:
-        ode = functools.partial(solve_ode, rtol=rtol, n_history=n_history, solver=solver)
-        acc, final, raw = forward_jacobian_jvp(ode)(mu, safe_phi)
+        ode = lambda mu, phi, rtol: solve_ode(
+            mu, phi, rtol=rtol, n_history=n_history, solver=solver
+        )
+        acc, final, raw = forward_jacobian_jvp(ode, n_differentiable=2)(mu, safe_phi, rtol)
         damage = final.pop("damage")
     history = None
     if n_history:
@@ -86,7 +94,8 @@ def normal_impact(
     - `method`: `"closed_form"` ((3.2.11)-(3.2.20), quadrature in S with the end
       singularity at S = alpha integrated exactly) or `"ode"` (diffrax, one solve per
       phase, switching on real-valued events).
-    - `rtol`: relative tolerance: of the ODE solver, or the target of the quadrature.
+    - `rtol`: relative tolerance: of the ODE solver (a new one runs the same compiled
+      program), or the target of the quadrature (which sets its number of nodes).
     - `n_history`: number of saved samples per phase (0: none, the cheapest).
     - `solver`: diffrax solver for `method="ode"` (default `diffrax.Tsit5()`).
 
@@ -104,13 +113,14 @@ def normal_impact(
     mu, phi, speed = jnp.broadcast_arrays(mu, phi, speed)
     options = dict(
         method=method,
-        rtol=float(rtol),
+        points=quadrature_points(rtol) if method == "closed_form" else None,
         n_history=int(n_history),
         solver=solver if solver is not None else diffrax.Tsit5(),
     )
+    rtol = jnp.asarray(rtol, mu.dtype)
     if mu.ndim == 0:
-        return _normal_impact(mu, phi, speed, **options)
-    chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, **options)
+        return _normal_impact(mu, phi, speed, rtol, **options)
+    chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, rtol, **options)
     return solve_padded(chunked, (mu, phi, speed), PADDING_QUANTUM)
 
 
@@ -120,9 +130,9 @@ def normal_impact(
 _CHUNK = {"closed_form": 8192, "ode": 2048}
 
 
-@functools.partial(jax.jit, static_argnames=("method", "rtol", "n_history", "solver"))
-def _normal_impact_chunked(mu, phi, speed, **options):
-    solve = functools.partial(_normal_impact, **options)
+@functools.partial(jax.jit, static_argnames=_STATIC)
+def _normal_impact_chunked(mu, phi, speed, rtol, **options):
+    solve = lambda mu, phi, speed: _normal_impact(mu, phi, speed, rtol, **options)
     if options["method"] == "closed_form":
         return jax.lax.map(lambda x: solve(*x), (mu, phi, speed), batch_size=_CHUNK["closed_form"])
     # A vmapped solve steps until its slowest member is done. The decelerative phase's step

@@ -65,7 +65,7 @@ def _split(dec: Decelerative):
     return s_mid, jnp.log(jnp.asarray(0.75, s_mid.dtype))
 
 
-def _quadrature_points(rtol: float) -> int:
+def quadrature_points(rtol: float) -> int:
     """Nodes per segment. The rules converge geometrically; against a 30-digit reference
     over the property-test range (benchmarks/normal_impact.py) the largest relative error
     is 7e-9 with 10 nodes, 3e-10 with 12 and 5e-12 with 15, so 1.5 nodes per digit keeps
@@ -73,10 +73,12 @@ def _quadrature_points(rtol: float) -> int:
     return int(min(48, max(8, math.ceil(-1.5 * math.log10(rtol)))))
 
 
-def solve_closed_form(mu, phi, *, rtol, n_history):
+def solve_closed_form(mu, phi, *, points, n_history):
+    """The closed form with `points` Gauss-Legendre nodes per segment
+    (`quadrature_points` of the tolerance)."""
     acc = accelerative_phase(mu, phi)
     dec = decelerative_constants(mu, acc)
-    n = _quadrature_points(rtol)
+    n = points
     s_mid, log_split = _split(dec)
     tau, w, backing, hinge = _head_integrals(dec, s_mid, n) + _tail_integrals(dec, log_split, n)
     t_star, w_star, s_star = acc.t_star, acc.w_star, acc.s_star
