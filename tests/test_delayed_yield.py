@@ -235,3 +235,15 @@ def test_bad_inputs_name_the_field():
         grain_diameter(0.0)
     with pytest.raises(ValueError, match="t_max must be positive"):
         delay_time_of(lambda t, s: s, 0.0, 1.0, **p)
+    with pytest.raises(ValueError, match=r"rtol must be in \(0, 1\)"):
+        delay_time_of(lambda t, s: s, 1.0, 1.0, **p, rtol=0.0)
+
+
+def test_a_new_tolerance_runs_the_same_program(compilations):
+    p = params()
+    t_d = float(upper_yield_stress(1.0, E=E, **p)) / E  # constant rate E: t_d = sigma* / E
+    loose = delay_time_of(linear, 10 * t_d, E, **p, rtol=1e-3)
+    with compilations() as programs:
+        tight = delay_time_of(linear, 10 * t_d, E, **p, rtol=1e-10)
+    assert not [m for m in programs if "delay_time_of" in m], programs
+    assert abs(float(tight) - t_d) < 1e-3 * abs(float(loose) - t_d)

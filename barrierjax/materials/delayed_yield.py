@@ -191,7 +191,8 @@ def delay_time_of(stress_fn, t_max, args=None, *, sigma0, A, d, beta, rtol=1e-10
       stays below 1 up to it.
     - `args`: a PyTree passed to `stress_fn`; differentiate with respect to it.
     - `sigma0`, `A`, `d`, `beta`: the constants of (2.3.2), positive.
-    - `rtol`: relative (and absolute) tolerance of the integration.
+    - `rtol`: relative (and absolute) tolerance of the integration, in (0, 1); a new one
+      runs the same compiled program.
 
     The integral is the state of one diffrax solve (Tsit5) that ends on the real-valued
     event `integral - 1`, so t_d carries an exact gradient in forward and reverse mode.
@@ -199,6 +200,9 @@ def delay_time_of(stress_fn, t_max, args=None, *, sigma0, A, d, beta, rtol=1e-10
     t_max = _checks.positive("t_max", t_max)
     # Python numbers would be static under filter_jit: one compilation per value.
     args = jax.tree.map(lambda x: jnp.asarray(x) if isinstance(x, int | float) else x, args)
+    if not 0.0 < rtol < 1.0:
+        raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
+    rtol = jnp.asarray(rtol, t_max.dtype)  # traced: a new tolerance runs the same program
     return _delay_time_of(stress_fn, t_max, args, *_delay_parameters(sigma0, A, d, beta), rtol)
 
 
