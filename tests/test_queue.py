@@ -40,7 +40,7 @@ def finish(state, lane):
     return {"total": jnp.sum(jnp.where(recorded, state["rows"][lane], 0.0)), "k": state["k"]}
 
 
-def solve(steps, scale, lanes, refill, count=None):
+def solve(steps, scale, lanes, refill, count=None, order=None):
     return solve_queued(
         start,
         step,
@@ -52,6 +52,7 @@ def solve(steps, scale, lanes, refill, count=None):
         lanes=lanes,
         refill=refill,
         count=count,
+        order=order,
     )
 
 
@@ -93,3 +94,21 @@ def test_problems_past_the_count_are_never_started(count):
     expected = np.asarray(scale)[:count] * (1 + m * (m - 1) / 2)
     np.testing.assert_allclose(out["total"][:count], expected, rtol=1e-12)
     assert not np.any(np.asarray(out["total"][count:]))
+
+
+@pytest.mark.parametrize("count", [None, 5])
+def test_problems_started_in_another_order_are_solved_in_their_places(count):
+    """`order` starts the problems in another sequence (the real ones first); each result
+    still lands at its problem's index, and the padding is still never started."""
+    steps = jnp.array([5, 1, 12, 3, 7, 2, 9, 4], jnp.int32)
+    scale = jnp.linspace(1.0, 2.0, 8)
+    order = jnp.array([2, 0, 4, 3, 1, 7, 6, 5])  # the five real ones first
+    traced_count = None if count is None else jnp.asarray(count)
+    out = jax.jit(solve, static_argnums=(2, 3))(steps, scale, 3, 2, traced_count, order)
+    given = jax.jit(solve, static_argnums=(2, 3))(steps, scale, 3, 2, traced_count)
+    for name in ("k", "total"):
+        np.testing.assert_array_equal(out[name], given[name])
+    real = 8 if count is None else count
+    m = np.asarray(steps)[:real]
+    np.testing.assert_array_equal(out["k"][:real], m)
+    assert not np.any(np.asarray(out["total"][real:]))

@@ -26,6 +26,7 @@ def solve_queued(
     lanes: int,
     refill: int,
     count=None,
+    order=None,
 ):
     """`finish(c, lane)` for each problem `x` along the leading axis of `inputs`, where `c`
     is `start(x)` stepped by `step` while `running(c)` in lane `lane`.
@@ -41,7 +42,12 @@ def solve_queued(
 
     `count` (traced; default: all of them) is how many of the problems are real: the rest
     pad the inputs to a size whose program is already compiled, and are never started
-    (their results are zeros)."""
+    (their results are zeros).
+
+    `order` (traced; default: as given) is the order in which the problems are started, a
+    permutation of their indices with the first `count` real ones first. The last lanes
+    to finish keep the loop going for all: started first, the longest problems no longer
+    end the queue."""
     n = jax.tree.leaves(inputs)[0].shape[0]
     if n == 0:
         # The results' shapes, from the same solve of a single (zero) problem.
@@ -51,11 +57,12 @@ def solve_queued(
         return jax.tree.map(lambda s: jnp.zeros((0, *s.shape[1:]), s.dtype), shapes)
     lanes = min(lanes, n)
     refill = min(refill, lanes)
+    order = jnp.arange(n) if order is None else jnp.asarray(order)
     take = lambda tree, index: jax.tree.map(lambda a: a[index], tree)
     lanes_running = jax.vmap(running)
 
-    carry = jax.vmap(start)(take(inputs, jnp.arange(lanes)))
-    owner = jnp.arange(lanes)  # the problem in each lane; n: none
+    carry = jax.vmap(start)(take(inputs, order[:lanes]))
+    owner = jnp.arange(lanes)  # the place in the queue of each lane's problem; n: none
     count = jnp.asarray(n if count is None else count).astype(owner.dtype)
 
     def finish_lanes(carry, lane):
@@ -87,9 +94,9 @@ def solve_queued(
         lane = jnp.nonzero(finished, size=refill, fill_value=lanes)[0]
         valid = lane < lanes
         lane_in = jnp.minimum(lane, lanes - 1)
-        problem = jnp.where(valid, owner[lane_in], n)
+        problem = jnp.where(valid, order[jnp.minimum(owner[lane_in], n - 1)], n)
         following = queued + jnp.cumsum(valid) - 1
-        fresh = jax.vmap(start)(take(inputs, jnp.minimum(following, n - 1)))
+        fresh = jax.vmap(start)(take(inputs, order[jnp.minimum(following, n - 1)]))
         following = jnp.where(following < count, following, n)
         lane = jnp.where(valid, lane, lanes)
         # Out-of-range indices (no lane, no problem) are dropped.

@@ -199,7 +199,9 @@ def _of_lane(carry: Carry, lane) -> Carry:
 # random scenarios at rtol 1e-6 (benchmarks/oblique_impact.py's box, 2 CPU cores, best of
 # 4 interleaved calls): 78 us per scenario with 256 lanes, 61-67 with 384, 106 with 512
 # (the lanes' buffers, 74 kB each at the default max_steps, then outgrow the caches).
-_LANES, _REFILL = 384, 48
+# Refilled 16 at a time, 5,000 scenarios, one core, heaviest first: 38.7-40.9 us per
+# scenario, against 41.9-45.4 with 48 and 41.5-43.0 with 8 (2026-11-27).
+_LANES, _REFILL = 384, 16
 
 
 def _solve(mu, phi, vn, vh, friction, rtol, count, *, max_steps, n_history, n_x, batched):
@@ -224,7 +226,20 @@ def _solve(mu, phi, vn, vh, friction, rtol, count, *, max_steps, n_history, n_x,
         lanes=_LANES,
         refill=_REFILL,
         count=count,
+        order=_heaviest_first(mu, count),
     )
+
+
+def _heaviest_first(mu, count):
+    """The real scenarios by decreasing mass ratio, then the padding. The heavier the
+    vehicle, the more steps its impact takes (rank correlation 0.88 over 3,000 scenarios of
+    benchmarks/oblique_impact.py's box), so that the queue ends on short solves: on 5,000
+    scenarios (refilled 48 at a time) its loop ran 835 iterations in the order given, 141
+    of them after the last start, and 755, 50 after, heaviest first; 671 had every lane
+    been busy throughout."""
+    index = jnp.arange(mu.shape[0])
+    real = index < jnp.asarray(mu.shape[0] if count is None else count).astype(index.dtype)
+    return jnp.argsort(jnp.where(real, -mu, jnp.inf))
 
 
 _STATIC = ("max_steps", "n_history", "n_x")
