@@ -173,10 +173,16 @@ def optimize_robust(
     **options,
 ) -> RobustReport:
     """Solve `problem` by gradients from `STARTS` (`minimise` with `options`, default
-    25 adam steps per outer iteration), check against `grid_along_boundary`, evaluate the
-    `baseline` barrier, and report. `progress(message)` is told of each stage."""
+    25 adam steps per outer iteration and `xtol` 1e-4), check against
+    `grid_along_boundary`, evaluate the `baseline` barrier, and report. `progress(message)`
+    is told of each stage.
+
+    Each round's result is polished onto the constraints' boundary, so a start need not
+    settle finer than the polish resolves: on the default TL-3 problem `xtol` 1e-4 moved
+    the optimum's expected crush by 7e-7 of itself against `minimise`'s 1e-6, and the
+    optimiser's run took 13.3 s instead of 19.9 (2 cores, 2026-11-27)."""
     form = robust_formulation(problem)
-    options = {"inner_steps": 25, **options}
+    options = {"inner_steps": 25, "xtol": 1e-4, **options}
     starts = jnp.asarray(STARTS, dtype=problem.lower.dtype)
     progress("optimizing (compiling the model and its gradient, then about a minute)...")
     solution, time_solve = timed(lambda: minimise(form, starts, **options))
