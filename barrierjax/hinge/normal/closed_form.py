@@ -78,9 +78,9 @@ def solve_closed_form(mu, phi, *, points, n_history):
     (`quadrature_points` of the tolerance)."""
     acc = accelerative_phase(mu, phi)
     dec = decelerative_constants(mu, acc)
-    n = points
     s_mid, log_split = _split(dec)
-    tau, w, backing, hinge = _head_integrals(dec, s_mid, n) + _tail_integrals(dec, log_split, n)
+    head, tail = _head_integrals(dec, s_mid, points), _tail_integrals(dec, log_split, points)
+    tau, w, backing, hinge = head + tail
     t_star, w_star, s_star = acc.t_star, acc.w_star, acc.s_star
     final = dict(
         s_final=dec.alpha,
@@ -91,7 +91,7 @@ def solve_closed_form(mu, phi, *, points, n_history):
     )
     history = None
     if n_history:
-        history = _closed_form_history(acc, dec, n, final, n_history)
+        history = _closed_form_history(acc, dec, points, final, n_history)
     return acc, final, history
 
 
