@@ -40,7 +40,8 @@ Derivatives: the contact phase runs in segments between the breakpoints of Psi' 
 `transitions.transition`), so that they match finite differences.
 
 Arrays of scenarios run in lanes refilled from a queue (`barrierjax._solve.queue`): under
-a plain `vmap`, every member would step until the slowest is done.
+a plain `vmap`, every member would step until the slowest is done. The heaviest vehicles
+(the longest solves) start first, so that the queue ends on short ones.
 """
 
 from .api import moving_load, oblique_impact
