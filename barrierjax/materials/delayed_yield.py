@@ -200,9 +200,8 @@ def delay_time_of(stress_fn, t_max, args=None, *, sigma0, A, d, beta, rtol=1e-10
     t_max = _checks.positive("t_max", t_max)
     # Python numbers would be static under filter_jit: one compilation per value.
     args = jax.tree.map(lambda x: jnp.asarray(x) if isinstance(x, int | float) else x, args)
-    if not 0.0 < rtol < 1.0:
-        raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
-    rtol = jnp.asarray(rtol, t_max.dtype)  # traced: a new tolerance runs the same program
+    # An array, traced: a new tolerance runs the same program.
+    rtol = _checks.check("rtol", rtol, lambda x: (x > 0.0) & (x < 1.0), "in (0, 1)")
     return _delay_time_of(stress_fn, t_max, args, *_delay_parameters(sigma0, A, d, beta), rtol)
 
 
