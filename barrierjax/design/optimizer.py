@@ -189,11 +189,11 @@ def to_boundary(form: Formulation, u):
 
     def body(k, carry):
         f, c, a, b, fa, ca = carry
-        at_end = k < n_ends
-        point = jnp.where(at_end, ends[jnp.minimum(k, n_ends - 1)], 0.5 * (a + b))
+        at_end, end = k < n_ends, jnp.minimum(k, n_ends - 1)
+        point = jnp.where(at_end, ends[end], 0.5 * (a + b))
         f_k, c_k = form.evaluate(point)
-        f = jnp.where(at_end, f.at[jnp.minimum(k, n_ends - 1)].set(f_k), f)
-        c = jnp.where(at_end, c.at[jnp.minimum(k, n_ends - 1)].set(c_k), c)
+        f = jnp.where(at_end, f.at[end].set(f_k), f)
+        c = jnp.where(at_end, c.at[end].set(c_k), c)
         ok = ~at_end & (c_k <= 0.0)
         stepped = (
             jnp.where(ok, point, a),
