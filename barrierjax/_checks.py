@@ -67,6 +67,15 @@ def in_range(name: str, value, low: float, high: float):
     return check(name, value, lambda x: (x > low) & (x <= high), f"in ({low:g}, {high:g}]")
 
 
+def tolerance(name: str, rtol) -> float:
+    """A relative tolerance given as a Python number, in (0, 1), as a float: for the
+    options that a model reads while it is traced (a quadrature's node count, a step
+    budget), not as an argument of its program."""
+    if not 0.0 < rtol < 1.0:
+        raise ValueError(f"{name} must be in (0, 1); got {rtol!r}")
+    return float(rtol)
+
+
 def history_samples(n_history, *, optional: bool = True) -> int:
     """A history's sample count: an integer >= 2, or 0 for none where `optional`."""
     if int(n_history) != n_history or n_history < 2 and not (optional and n_history == 0):

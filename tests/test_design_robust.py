@@ -179,6 +179,8 @@ def test_bad_inputs_name_the_field():
         RobustSizing(backing_bounds=(300e3, 5e3))
     with pytest.raises(ValueError, match="RobustSizing.thickness_bounds: the upper thickness"):
         RobustSizing(thickness_bounds=(5e-3, 0.09))
+    with pytest.raises(ValueError, match=r"RobustSizing.rtol must be in \(0, 1\)"):
+        RobustSizing(rtol=0.0)
     with pytest.raises(ValueError, match="road_class must be one of"):
         RobustSizing(road_class="Autobahn")
 

@@ -292,6 +292,7 @@ def test_gradients_match_finite_differences_where_friction_stops_the_slide_while
         (dict(normal_speed=float("nan")), "normal_speed"),
         (dict(tangential_speed=-0.1), "tangential_speed"),
         (dict(friction=-0.2), "friction"),
+        (dict(rtol=1.0), r"rtol must be in \(0, 1\)"),
     ],
 )
 def test_bad_input_names_the_field(kwargs, field):

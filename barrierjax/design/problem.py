@@ -134,9 +134,7 @@ class SizingProblem(eqx.Module):
         if not isinstance(self.cases, ImpactCases):
             raise ValueError("SizingProblem.cases must be a barrierjax.design.ImpactCases")
         self.deflection_limit = _checks.positive("SizingProblem.deflection_limit", deflection_limit)
-        if not 0.0 < rtol < 1.0:
-            raise ValueError(f"SizingProblem.rtol must be in (0, 1); got {rtol!r}")
-        self.rtol = float(rtol)
+        self.rtol = _checks.tolerance("SizingProblem.rtol", rtol)
 
     @property
     def lower(self) -> Float[Array, "3"]:

@@ -146,9 +146,7 @@ class RobustSizing(eqx.Module):
         self.oiv_limit = jnp.asarray(limits["OIV"].maximum)
         self.ora_limit = jnp.asarray(limits["ORA"].maximum)
         self.level = f"MASH {tests[0].level}"
-        if not 0.0 < rtol < 1.0:
-            raise ValueError(f"RobustSizing.rtol must be in (0, 1); got {rtol!r}")
-        self.rtol = float(rtol)
+        self.rtol = _checks.tolerance("RobustSizing.rtol", rtol)
         softest = rail_barrier(self, self.lower)
         longest = max(
             float(_normal_impact(self, softest, m, v * math.sin(math.radians(a)), 0).duration)

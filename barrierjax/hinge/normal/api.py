@@ -62,8 +62,7 @@ def _normal_impact(mu, phi, speed, rtol, *, method, points, n_history, solver):
 def checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history):
     """The checks that `normal_impact` and `axial_impact` share: the options, then the
     inputs, as arrays."""
-    if not 0.0 < rtol < 1.0:
-        raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
+    _checks.tolerance("rtol", rtol)
     _checks.history_samples(n_history)
     return (
         _checks.positive("mass_ratio", mass_ratio),

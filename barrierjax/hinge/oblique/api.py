@@ -57,8 +57,8 @@ def _force_ratio(force_ratio):
 
 
 def _check_options(rtol, max_steps):
-    if rtol is not None and not 0.0 < rtol < 1.0:
-        raise ValueError(f"rtol must be in (0, 1); got {rtol!r}")
+    if rtol is not None:
+        _checks.tolerance("rtol", rtol)
     if max_steps is not None and (int(max_steps) != max_steps or max_steps < 16):
         raise ValueError(f"max_steps must be None or an integer >= 16; got {max_steps!r}")
 
