@@ -35,19 +35,27 @@ class Quintic:
             sum(float(m) * d for m, d in zip(row, data) if m != 0.0) for row in _POWERS
         )
 
-    def __call__(self, u):
-        """Value, slope and second derivative in x at the fraction `u` of the interval."""
+    def __call__(self, u, derivatives: int = 2):
+        """Value, slope and second derivative in x at the fraction `u` of the interval:
+        the value and its first `derivatives` (those a caller does not need are not
+        traced)."""
         value, slope, half_second = self.powers[5], 0.0, 0.0
         for power in self.powers[4::-1]:
-            half_second = half_second * u + slope
-            slope = slope * u + value
+            if derivatives > 1:
+                half_second = half_second * u + slope
+            if derivatives > 0:
+                slope = slope * u + value
             value = value * u + power
+        if derivatives == 0:
+            return (value,)
+        if derivatives == 1:
+            return value, slope / self.width
         return value, slope / self.width, 2.0 * half_second / self.width**2
 
 
-def quintic_hermite(u, width, left, right):
+def quintic_hermite(u, width, left, right, derivatives: int = 2):
     """The quintic on [0, 1] through (value, slope, second derivative) at both ends, the
-    derivatives in x = u width: its value, slope and second derivative in x at u.
+    derivatives in x = u width: its value and first `derivatives` derivatives in x at u.
 
     Exact on quintics; error O(width^6) on smooth functions."""
-    return Quintic(width, left, right)(u)
+    return Quintic(width, left, right)(u, derivatives)

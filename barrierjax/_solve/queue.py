@@ -115,8 +115,10 @@ def solve_queued(
         )
 
     def unchanged(carry, busy, owner, queued, results):
-        seeds = jax.eval_shape(refilled, carry, busy, owner, queued, results)[-1]
-        zeros = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), seeds)
+        # (The seeds' shapes from the lanes' buffers, not from tracing `refilled` again.)
+        zeros = jax.tree.map(
+            lambda b: jnp.zeros((refill, seed_rows, *b.shape[2:]), b.dtype), buffers(carry)
+        )
         return without_buffers(carry), busy, owner, queued, results, jnp.full(refill, lanes), zeros
 
     def body(state):

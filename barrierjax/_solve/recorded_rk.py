@@ -179,9 +179,9 @@ def _interpolant(start, end, length):
     quintics = [Quintic(length, data[:3], data[3:]) for data in ends]
     structure = jax.tree.structure(start[0])
 
-    def at(u):
-        values = [quintic(u) for quintic in quintics]
-        return tuple(structure.unflatten([v[k] for v in values]) for k in range(3))
+    def at(u, derivatives=2):
+        values = [quintic(u, derivatives) for quintic in quintics]
+        return tuple(structure.unflatten([v[k] for v in values]) for k in range(derivatives + 1))
 
     return at
 
@@ -198,7 +198,7 @@ def _locate(event, start, end, e_start, e_end, length):
     derivative is the implicit function theorem's. The interpolant is formed once per
     step; its evaluations are Horner's rule."""
     at = _interpolant(start, end, length)
-    terms_at = lambda u: event(*at(u)[:2])
+    terms_at = lambda u: event(*at(u, derivatives=1))
     crossing = e_end <= 0.0
     # (Only the stopped fractions leave the iterations: their tangents are dead code.)
     e_start, e_end = jax.lax.stop_gradient((e_start, e_end))
@@ -216,7 +216,9 @@ def _locate(event, start, end, e_start, e_end, length):
         # of the last correction, taken there, was off.)
         return jnp.where((step >= lo) & (step <= hi), step, 0.5 * (lo + hi)), lo, hi
 
-    bracket = (u, jnp.zeros_like(u), jnp.ones_like(u))
+    # (The bracket's ends made from u, so that under `vmap` they are batched from the
+    # start, as the iterations make them: else the loop's body is batched twice.)
+    bracket = (u, jnp.where(u == u, 0.0, 0.0), jnp.where(u == u, 1.0, 1.0))
     u, _, _ = jax.lax.fori_loop(0, _NEWTON_ITERATIONS, newton, bracket)
     u = jax.lax.stop_gradient(jnp.where(crossing, u, jnp.inf))
     first = jnp.argmin(u)

@@ -138,7 +138,7 @@ def slope_memory(past: Past, x, s_star):
     left, right = data(i), data(j)
     width = jnp.where(interior, h_j - h_i, 1.0)
     u = jnp.where(interior, (x - h_i) / width, 0.0)
-    psi, dpsi, _ = quintic_hermite(u, width, left, right)
+    psi, dpsi = quintic_hermite(u, width, left, right, derivatives=1)
     # Next to a breakpoint the second derivatives are one-sided limits of a fast-changing
     # trace: cubic there (the second-derivative data dropped), which stays stable where
     # breakpoints cluster.
