@@ -173,8 +173,8 @@ def _error_ratio(y0, y1, error, rtol, atol):
 
 def _interpolant(start, end, length):
     """The step's quintic Hermite interpolant of (y, f, f') through `start` and `end`, each
-    (y, f, f'), as a function of the fraction of the step: one `Quintic` per leaf of the
-    state, formed once."""
+    (y, f, f'), as a function of the fraction of the step (with `derivatives=1`, (y, f)
+    alone): one `Quintic` per leaf of the state, formed once."""
     ends = zip(*(jax.tree.leaves(x) for x in (*start, *end)))
     quintics = [Quintic(length, data[:3], data[3:]) for data in ends]
     structure = jax.tree.structure(start[0])
