@@ -68,9 +68,8 @@ def in_range(name: str, value, low: float, high: float):
 
 
 def tolerance(name: str, rtol) -> float:
-    """A relative tolerance given as a Python number, in (0, 1), as a float: for the
-    options that a model reads while it is traced (a quadrature's node count, a step
-    budget), not as an argument of its program."""
+    """A relative tolerance given as a Python number, checked to lie in (0, 1), as a
+    float (`check` states the same rule for a traced one)."""
     if not 0.0 < rtol < 1.0:
         raise ValueError(f"{name} must be in (0, 1); got {rtol!r}")
     return float(rtol)

@@ -36,18 +36,14 @@ class Quintic:
         )
 
     def __call__(self, u, derivatives: int = 2):
-        """Value, slope and second derivative in x at the fraction `u` of the interval:
-        the value and its first `derivatives` (those a caller does not need are not
-        traced)."""
+        """Value, slope and second derivative in x at the fraction `u` of the interval;
+        with `derivatives=1`, value and slope alone (the second is then not traced)."""
         value, slope, half_second = self.powers[5], 0.0, 0.0
         for power in self.powers[4::-1]:
-            if derivatives > 1:
+            if derivatives == 2:
                 half_second = half_second * u + slope
-            if derivatives > 0:
-                slope = slope * u + value
+            slope = slope * u + value
             value = value * u + power
-        if derivatives == 0:
-            return (value,)
         if derivatives == 1:
             return value, slope / self.width
         return value, slope / self.width, 2.0 * half_second / self.width**2
@@ -55,7 +51,8 @@ class Quintic:
 
 def quintic_hermite(u, width, left, right, derivatives: int = 2):
     """The quintic on [0, 1] through (value, slope, second derivative) at both ends, the
-    derivatives in x = u width: its value and first `derivatives` derivatives in x at u.
+    derivatives in x = u width: its value, slope and (`derivatives=2`) second derivative
+    in x at u.
 
     Exact on quintics; error O(width^6) on smooth functions."""
     return Quintic(width, left, right)(u, derivatives)
