@@ -14,7 +14,7 @@ from jaxtyping import Array
 
 from .formulation import Formulation
 from .model import sizing_formulation
-from .optimizer import BISECTION_STEPS, to_boundary
+from .optimizer import BOUNDARY_STEPS, to_boundary
 from .problem import SizingProblem
 
 
@@ -155,7 +155,7 @@ def grid_along_boundary(
     """Brute force for a problem whose optimum lies on its constraints' boundary, as the
     robust sizing's does (the softer the backing, the less the crush, until a crash test
     deflects too far): the other coordinates on a uniform grid of n points each, and for
-    every grid point the boundary along the stiffening one, found by bisection
+    every grid point the boundary along the stiffening one, found by regula falsi
     (`to_boundary`, to rounding); then `refine` zoom levels of n points a coordinate on a
     window centred on the best so far (half-width two cells, shrinking by `shrink`).
 
@@ -168,7 +168,7 @@ def grid_along_boundary(
             f"n={n}, refine={refine}, shrink={shrink}"
         )
     lines = int(n) ** (int(form.problem.lower.shape[0]) - 1)
-    per_line = 4 + BISECTION_STEPS  # the design, three ends of its line, the bisection
+    per_line = 4 + BOUNDARY_STEPS  # the design, three ends of its line, the root search
     return _zoomed(
         form,
         lambda low, high, first: _boundary_points(form, low, high, int(n)),

@@ -1,8 +1,8 @@
 """The robust sizing's report: `optimize_robust` solves a `RobustSizing` by gradients
 (`minimise` of its formulation), checks the result against the brute-force grid
 (`grid_along_boundary`: every wall thickness of a grid, the backing strength that puts
-the design on its constraints' boundary, by bisection), evaluates a baseline barrier (the scene's) the same way, and returns a
-`RobustReport` (`summary()`, `as_dict()`)."""
+the design on its constraints' boundary, by regula falsi), evaluates a baseline barrier
+(the scene's) the same way, and returns a `RobustReport` (`summary()`, `as_dict()`)."""
 
 import dataclasses
 import math
@@ -151,7 +151,7 @@ class RobustReport:
         status = lambda p: "all criteria met" if p.feasible else "FAILS a criterion"
         lines += [
             f"  verdict: optimum {status(optimum)}; {self.baseline_name} {status(base)}",
-            f"Brute force ({self.grid_evaluations} designs: the boundary by bisection from "
+            f"Brute force ({self.grid_evaluations} designs: the boundary by regula falsi from "
             "each point of a zoomed grid of t): best t "
             f"{1e3 * self.grid_t:.3f} mm, q0 {1e-3 * self.grid_q0:.3f} kN/m, expected crush "
             f"{1e3 * self.grid_objective:.4f} mm",
