@@ -48,6 +48,24 @@ def test_to_boundary_lands_on_the_constraint(form):
     assert -1e-12 <= float(c) <= 0.0 and float(f) == pytest.approx(0.04 + 0.45, abs=1e-12)
 
 
+def _curved(problem, u):
+    """Along u1 the constraint is steep and curved, exp(8 (0.3 - u1)) - 1, zero at 0.3;
+    at u0 = 1 a second term, 0.3 - u1, crosses it there: the larger has a kink at the
+    root, slopes -8 and -1 (at u0 = 0 the second term is -1, never the larger)."""
+    steep = jnp.expm1(8.0 * (0.3 - u[1]))
+    return u[1], jnp.stack([steep, u[0] * (0.3 - u[1]) - (1.0 - u[0])])
+
+
+@pytest.mark.parametrize("u0", [0.0, 1.0])  # one smooth term; two with a kink at the root
+@pytest.mark.parametrize("start", [0.95, 0.01])  # feasible with slack; infeasible
+def test_to_boundary_lands_on_a_curved_or_kinked_constraint_to_rounding(u0, start):
+    box = _Box(jnp.zeros(2), jnp.ones(2))
+    curved = Formulation(box, jnp.asarray(1.0), measure=_curved, design=_unit, stiffening=1)
+    u, f, c = to_boundary(curved, jnp.array([u0, start]))
+    assert float(u[1]) == pytest.approx(0.3, abs=1e-13)
+    assert -1e-12 <= float(c) <= 0.0 and float(f) == pytest.approx(0.3, abs=1e-13)
+
+
 def test_minimise_finds_the_closed_form_optimum(form):
     solution = minimise(form, default_starts(2))
     k = int(solution.best)
