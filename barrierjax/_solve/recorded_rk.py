@@ -216,9 +216,9 @@ def _locate(event, start, end, e_start, e_end, length):
         # of the last correction, taken there, was off.)
         return jnp.where((step >= lo) & (step <= hi), step, 0.5 * (lo + hi)), lo, hi
 
-    # (The bracket's ends made from u, so that under `vmap` they are batched from the
-    # start, as the iterations make them: else the loop's body is batched twice.)
-    bracket = (u, jnp.where(u == u, 0.0, 0.0), jnp.where(u == u, 1.0, 1.0))
+    # (The bracket's ends tied to u, so that under `vmap` they are batched from the start,
+    # as the iterations make them: else the loop's body is batched twice.)
+    bracket = _tied((u, jnp.zeros_like(u), jnp.ones_like(u)), u)
     u, _, _ = jax.lax.fori_loop(0, _NEWTON_ITERATIONS, newton, bracket)
     u = jax.lax.stop_gradient(jnp.where(crossing, u, jnp.inf))
     first = jnp.argmin(u)
@@ -246,8 +246,9 @@ def _tied(tree, inputs):
     tangent wherever an input has one. A while loop's JVP starts from the carries whose
     tangents are nonzero at its start and traces the body again each time a step turns
     another one nonzero. The oblique model's loop was traced twice, and its scalar
-    gradient took 4.5 s to trace; tied, once and 3.3 s. The zero is a select, not a
-    product, so that an infinite input cannot make it NaN."""
+    gradient took 4.5 s to trace; tied, once and 3.3 s. Under `vmap` likewise each leaf
+    is batched wherever an input is, and a loop's body is batched once. The zero is a
+    select, not a product, so that an infinite input cannot make it NaN."""
     real = lambda x: jnp.issubdtype(jnp.result_type(x), jnp.inexact)
     zero = jnp.zeros(())
     for x in filter(real, jax.tree.leaves(inputs)):
