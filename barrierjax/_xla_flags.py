@@ -1,33 +1,61 @@
 """XLA options that barrierjax needs, set when the package is imported (before JAX creates
 its CPU backend, where the user has not run a JAX computation yet).
 
-XLA's CPU runtime (jaxlib 0.10.2) runs a program's independent operations concurrently
-under its "concurrency-optimized" scheduler, and with it the gradient of a `jax.vmap` of 16
-beam runs (`beam.integrate`, report Example 1) never finished: every thread of the pool
-waited for work while the caller waited for the result. Without that scheduler the same
-program ran in 19 s the first time and 12.6 s after, and the models' other programs were
-as fast as before. A later hang of the same program, without the scheduler, showed the
-cause under gdb: both threads of the two-thread pool inside jaxlib's batched LU
-factorisation (`lapack_dgetrf_ffi`), each waiting for tasks that only the other could run,
-two independent factorisations having started at once. The beam's step now orders its
-factorisations, and with that the program finishes under the scheduler too (twice in two
-tries, 20 s each, 2026-11-27). The option stays off, as the first fix left it: its
-removal was not tested further (benchmarks/README.md, "A deadlock").
+`xla_cpu_enable_concurrency_optimized_scheduler=false`. XLA's CPU runtime (jaxlib 0.10.2)
+runs a program's independent operations concurrently under its "concurrency-optimized"
+scheduler, and with it the gradient of a `jax.vmap` of 16 beam runs (`beam.integrate`,
+report Example 1) never finished: every thread of the pool waited for work while the caller
+waited for the result. Without that scheduler the same program ran in 19 s the first time
+and 12.6 s after, and the models' other programs were as fast as before. A later hang of
+the same program, without the scheduler, showed the cause under gdb: both threads of the
+two-thread pool inside jaxlib's batched LU factorisation (`lapack_dgetrf_ffi`), each waiting
+for tasks that only the other could run, two independent factorisations having started at
+once. The beam's step now orders its factorisations, and with that the program finishes
+under the scheduler too (twice in two tries, 20 s each, 2026-11-27). The option stays off,
+as the first fix left it: its removal was not tested further (benchmarks/README.md, "A
+deadlock").
+
+`xla_cpu_use_fusion_emitters=false`, on jaxlib 0.10 only. XLA's CPU compiler of jaxlib 0.10
+emits each fusion through MLIR by default; its older LLVM IR emitters compile the models'
+programs in a half to nine tenths of the time, with about half the peak memory, and run
+them about as fast (benchmarks/README.md, "Twelfth pass"). jaxlib 0.11.2 has dropped the
+option, and XLA aborts the process on an option it does not know, so it is set only where
+it was found: jaxlib 0.10.1 and 0.10.2.
 """
 
+import importlib.metadata
 import os
 
 _SCHEDULER = "xla_cpu_enable_concurrency_optimized_scheduler"
+_FUSION_EMITTERS = "xla_cpu_use_fusion_emitters"
+
+
+def _jaxlib_minor() -> tuple[int, int] | None:
+    try:
+        major, minor = importlib.metadata.version("jaxlib").split(".")[:2]
+        return int(major), int(minor)
+    except (importlib.metadata.PackageNotFoundError, ValueError):
+        return None
+
+
+def default_flags() -> dict[str, str]:
+    """The options `set_default_flags` adds, for the installed jaxlib."""
+    flags = {_SCHEDULER: "false"}
+    if _jaxlib_minor() == (0, 10):
+        flags[_FUSION_EMITTERS] = "false"
+    return flags
 
 
 def set_default_flags() -> None:
-    """Add `--xla_cpu_enable_concurrency_optimized_scheduler=false` to `XLA_FLAGS`, unless
-    the variable already sets that option. It takes effect only where JAX has not yet run a
-    computation in this process (XLA reads its flags once, when the backend starts): import
-    barrierjax before your first JAX computation."""
+    """Add each of `default_flags()` to `XLA_FLAGS`, unless the variable already sets that
+    option. It takes effect only where JAX has not yet run a computation in this process
+    (XLA reads its flags once, when the backend starts): import barrierjax before your first
+    JAX computation."""
     flags = os.environ.get("XLA_FLAGS", "")
-    if _SCHEDULER not in flags:
-        os.environ["XLA_FLAGS"] = f"{flags} --{_SCHEDULER}=false".strip()
+    for name, value in default_flags().items():
+        if name not in flags:
+            flags = f"{flags} --{name}={value}".strip()
+    os.environ["XLA_FLAGS"] = flags
 
 
 set_default_flags()
