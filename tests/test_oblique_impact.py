@@ -87,9 +87,13 @@ def test_max_deflection_is_the_peak_of_the_final_shape(oblique_batch):
         assert 0.0 <= float(x[peak]) <= float(samples["position"][-1]) + float(x[1] - x[0])
         assert float(r.max_deflection[i]) == pytest.approx(shape[peak], rel=1e-5)
         # The history's last sample is the last recorded step's shape, on its own grid.
+        # The two sum the same recorded steps' increments in other orders and programs:
+        # up to 2.3e-11 of the peak apart under XLA's MLIR fusion emitters, 7.1e-11 under
+        # its LLVM IR emitters (barrierjax's default on jaxlib 0.10), where the solves'
+        # damage agrees to 1e-15; hence 1e-10 of the peak where the shape is near zero.
         on_grid = displacement_field(samples, count, r.history.x[i])[-1]
         np.testing.assert_allclose(
-            r.history.deflected_shape[i, -1], on_grid, rtol=1e-9, atol=1e-12 * float(jnp.max(on_grid))
+            r.history.deflected_shape[i, -1], on_grid, rtol=1e-9, atol=1e-10 * float(jnp.max(on_grid))
         )
 
 
