@@ -18,9 +18,11 @@ deadlock").
 `xla_cpu_use_fusion_emitters=false`, on jaxlib 0.10 only. XLA's CPU compiler of jaxlib 0.10
 emits each fusion through MLIR by default; its older LLVM IR emitters compile the models'
 programs in a half to nine tenths of the time, with about half the peak memory, and run
-them about as fast (benchmarks/README.md, "Twelfth pass"). jaxlib 0.11.2 has dropped the
-option, and XLA aborts the process on an option it does not know, so it is set only where
-it was found: jaxlib 0.10.1 and 0.10.2.
+most of them as fast or faster (benchmarks/README.md, "Twelfth pass"). Not the oblique
+model's batch: its step, thousands of products fused for hundreds of lanes, ran 1.4 times
+slower, so that program asks for the MLIR emitters back (`fusion_emitters`). jaxlib 0.11.2
+has dropped the option, and XLA aborts the process on an option it does not know, so it is
+set only where it was found: jaxlib 0.10.1 and 0.10.2.
 """
 
 import importlib.metadata
@@ -44,6 +46,12 @@ def default_flags() -> dict[str, str]:
     if _jaxlib_minor() == (0, 10):
         flags[_FUSION_EMITTERS] = "false"
     return flags
+
+
+def fusion_emitters() -> dict[str, bool]:
+    """`jax.jit`'s `compiler_options` for a program that XLA's MLIR fusion emitters run
+    faster than the LLVM IR ones `set_default_flags` chooses (none where it chose none)."""
+    return {_FUSION_EMITTERS: True} if _FUSION_EMITTERS in default_flags() else {}
 
 
 def set_default_flags() -> None:
