@@ -161,7 +161,9 @@ def oblique_impact(
 
     def solve(budget):
         options = {"max_steps": budget, "n_history": n_history, "n_x": _N_X}
-        solved = _oblique_solved if inputs[0].ndim == 0 else _oblique_batch_solved
+        # (XLA's options are for a program compiled by itself, not inside a caller's.)
+        traced = any(isinstance(x, Tracer) for x in inputs)
+        solved = _oblique_solved if inputs[0].ndim == 0 or traced else _oblique_batch_solved
         differentiable = forward_jacobian_jvp(
             functools.partial(solved, **options),
             n_differentiable=5,
