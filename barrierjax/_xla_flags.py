@@ -16,13 +16,14 @@ as the first fix left it: its removal was not tested further (benchmarks/README.
 deadlock").
 
 `xla_cpu_use_fusion_emitters=false`, on jaxlib 0.10 only. XLA's CPU compiler of jaxlib 0.10
-emits each fusion through MLIR by default; its older LLVM IR emitters compile the models'
-programs in a half to nine tenths of the time, with about half the peak memory, and run
-most of them as fast or faster (benchmarks/README.md, "Twelfth pass"). Not the oblique
-model's batch: its step, thousands of products fused for hundreds of lanes, ran 1.4 times
-slower, so that program asks for the MLIR emitters back (`fusion_emitters`). jaxlib 0.11.2
-has dropped the option, and XLA aborts the process on an option it does not know, so it is
-set only where it was found: jaxlib 0.10.1 and 0.10.2.
+emits each fusion through MLIR by default; with its older LLVM IR emitters the models'
+first calls take 0.42 to 1.03 times as long (median 0.7) and 0.43 to 0.93 times the peak
+memory (median 0.6), and most of their programs run as fast or faster
+(benchmarks/README.md, "Twelfth pass"). Not the oblique model's batch: its step, thousands
+of products fused for hundreds of lanes, ran 1.4 times slower, so that program asks for the
+MLIR emitters back (`fusion_emitters`). jaxlib 0.11.2 has dropped the option, and XLA
+aborts the process on an option it does not know, so it is set only where it was found:
+jaxlib 0.10.1 and 0.10.2.
 """
 
 import importlib.metadata
