@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.core import Tracer
 
+from ..compilation_cache import stored_program
 from .occupant import OccupantRisk, occupant_risk
 
 __all__ = ["ASSESS_STEP", "assess", "vehicle_record"]
@@ -60,6 +61,15 @@ def _vehicle_axes(time, normal_velocity, tangential_velocity, t, dt):
     return forward, left
 
 
+@stored_program
+@functools.partial(jax.jit, static_argnames="dt")
+def _vehicle_axes_rows(time, normal_velocity, tangential_velocity, t, *, dt):
+    """`_vehicle_axes` of each row (one history a row) at the shared times `t`; a program
+    of its own, which the command line keeps between runs."""
+    one = lambda *velocities: _vehicle_axes(*velocities, t, dt)
+    return jax.vmap(one)(time, normal_velocity, tangential_velocity)
+
+
 def assess(
     result, *, dt: float = ASSESS_STEP, t_end: float | None = None, asi_edition: str = "2010"
 ) -> OccupantRisk:
@@ -75,6 +85,6 @@ def assess(
         jnp.reshape(v, (-1, v.shape[-1]))
         for v in (history.time, history.vehicle_velocity, history.vehicle_tangential_velocity)
     ]
-    axes = jax.vmap(_vehicle_axes, in_axes=(0, 0, 0, None, None))(*velocities, t, dt)
+    axes = _vehicle_axes_rows(*velocities, jnp.asarray(t), dt=dt)
     ax, ay = (a.reshape(*batch, t.size) for a in axes)
     return occupant_risk(t, ax, ay, asi_edition=asi_edition)
