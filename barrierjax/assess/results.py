@@ -64,10 +64,13 @@ def _vehicle_axes(time, normal_velocity, tangential_velocity, t, dt):
 @stored_program
 @functools.partial(jax.jit, static_argnames="dt")
 def _vehicle_axes_rows(time, normal_velocity, tangential_velocity, t, *, dt):
-    """`_vehicle_axes` of each row (one history a row) at the shared times `t`; a program
-    of its own, which the command line keeps between runs."""
+    """`_vehicle_axes` of histories (on the last axis, any leading ones a batch) at the
+    shared times `t`: one program, reshapes included, which the command line keeps between
+    runs (each eager reshape would be a program of its own to find in a new process)."""
+    rows = lambda history: history.reshape(-1, history.shape[-1])
     one = lambda *velocities: _vehicle_axes(*velocities, t, dt)
-    return jax.vmap(one)(time, normal_velocity, tangential_velocity)
+    axes = jax.vmap(one)(rows(time), rows(normal_velocity), rows(tangential_velocity))
+    return tuple(a.reshape(*time.shape[:-1], t.size) for a in axes)
 
 
 def assess(
@@ -80,11 +83,6 @@ def assess(
     if history is None:
         raise ValueError("assess: the result has no history: simulate(scene, n_history>=2)")
     t = _grid(history, dt, t_end)
-    batch = np.shape(history.time)[:-1]
-    velocities = [
-        jnp.reshape(v, (-1, v.shape[-1]))
-        for v in (history.time, history.vehicle_velocity, history.vehicle_tangential_velocity)
-    ]
-    axes = _vehicle_axes_rows(*velocities, jnp.asarray(t), dt=dt)
-    ax, ay = (a.reshape(*batch, t.size) for a in axes)
+    velocities = history.time, history.vehicle_velocity, history.vehicle_tangential_velocity
+    ax, ay = _vehicle_axes_rows(*velocities, jnp.asarray(t), dt=dt)
     return occupant_risk(t, ax, ay, asi_edition=asi_edition)
