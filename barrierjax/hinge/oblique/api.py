@@ -81,7 +81,7 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
         result, outcome = solve(budget)
         if isinstance(outcome.complete, Tracer):
             return raise_failures(result, outcome, moving_load)
-        if np.any(outcome.overtaken):
+        if np.asarray(outcome.overtaken).any():
             raise RuntimeError(f"{name}: {OVERTAKEN_MESSAGE}")
         spent = ~np.asarray(outcome.complete).ravel()
         if not spent.any():
