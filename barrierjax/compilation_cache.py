@@ -98,17 +98,18 @@ _loading = threading.Lock()
 
 
 def stored_program(jitted):
-    """`jitted` (a `jax.jit` function whose static arguments are keywords), whose compiled
-    executable is kept on disk and loaded by later processes, within `keeping_programs()`
-    and where the positional arguments are concrete arrays (or None)."""
+    """`jitted` (a `jax.jit` or `equinox.filter_jit` function whose static arguments are
+    keywords), whose compiled executable is kept on disk and loaded by later processes,
+    within `keeping_programs()` and where the positional arguments are pytrees of concrete
+    arrays (equinox modules, None, tuples: every leaf an array)."""
 
     @functools.wraps(jitted)
     def call(*args, **static):
         import jax
 
         concrete = all(
-            a is None or (isinstance(a, jax.Array) and not isinstance(a, jax.core.Tracer))
-            for a in args
+            isinstance(a, jax.Array) and not isinstance(a, jax.core.Tracer)
+            for a in jax.tree.leaves(args)
         )
         if _programs is None or not concrete:
             return jitted(*args, **static)
@@ -125,14 +126,15 @@ def stored_program(jitted):
 
 
 def _key(jitted, args, static) -> str | None:
-    """What the program depends on, hashed; None where a static option has no stable text
-    (an object printed with its address)."""
+    """What the program depends on, hashed; None where a static option or the arguments'
+    tree has no stable text (an object printed with its address)."""
     import jax
 
-    options = repr(sorted(static.items()))
+    leaves, tree = jax.tree.flatten(args)
+    options = repr((sorted(static.items()), tree))
     if " at 0x" in options:
         return None
-    avals = [None if a is None else (a.shape, str(a.dtype), a.weak_type) for a in args]
+    avals = [(a.shape, str(a.dtype), a.weak_type) for a in leaves]
     settings = [jax.config.jax_enable_x64, jax.config.jax_numpy_dtype_promotion,
                 jax.config.jax_default_matmul_precision, os.environ.get("XLA_FLAGS", ""),
                 str(jax.devices()[0]), jax.device_count(), jax.process_count(),

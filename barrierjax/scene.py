@@ -23,6 +23,7 @@ import jax.numpy as jnp
 
 from . import _checks
 from ._custom_types import Batchable
+from .compilation_cache import stored_program
 
 
 class Barrier(eqx.Module):
@@ -128,6 +129,7 @@ def scales(barrier: Barrier) -> Scales:
     )
 
 
+@stored_program
 @eqx.filter_jit
 def dimensionless(scene: Scene) -> Dimensionless:
     """The report's groups of `scene`: mass ratio mu = M/(m L), force ratio phi = P0/P_b,

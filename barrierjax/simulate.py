@@ -15,6 +15,7 @@ from jax.core import Tracer
 from jaxtyping import Array, Float
 
 from ._custom_types import Batchable
+from .compilation_cache import stored_program
 from .hinge.axial import axial_impact
 from .hinge.normal import NormalImpact, normal_impact
 from .hinge.oblique import ObliqueImpact, oblique_impact
@@ -150,6 +151,7 @@ def _scaled(units, scales, quantities):
 
 # (One compiled function, not a dozen small ones: each eager operation is an executable
 # of its own, to compile or to load from the persistent cache, in every new process.)
+@stored_program
 @eqx.filter_jit
 def _in_units(scene, groups, model) -> Result:
     """The `Result` of a model's dimensionless result: its shared fields scaled, and what

@@ -323,7 +323,7 @@ def test_console_script_second_run_neither_traces_nor_compiles_the_models(tmp_pa
     first, second = run("--no-plots"), run("--no-plots")
     assert first.returncode == second.returncode == 0, first.stderr + second.stderr
     assert second.stdout == first.stdout and "Occupant risk" in second.stdout
-    models = ("_normal_impact", "_records", "_vehicle_axes_rows")
+    models = ("_normal_impact", "_records", "_vehicle_axes_rows", "_in_units", "dimensionless")
     assert all(name in first.stderr and name not in second.stderr for name in models)
     assert {p.name.split("-")[0] for p in (tmp_path / "cache" / "programs").iterdir()} == {
         name.strip("_") for name in models

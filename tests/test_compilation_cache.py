@@ -5,6 +5,7 @@ from pathlib import Path
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pytest
 
 from barrierjax import compilation_cache
@@ -58,20 +59,24 @@ def test_a_second_process_loads_what_the_first_compiled(tmp_path):
 # A jitted function that counts its traces, kept by `stored_program`, run in a fresh
 # process: the second process must load its program without tracing it.
 _TRACED_PROGRAM = """
-import functools, jax, jax.numpy as jnp
+import functools, jax, jax.numpy as jnp, equinox as eqx
 jax.config.update("jax_enable_x64", True)
 from barrierjax import compilation_cache
 traces = []
 
+class Pair(eqx.Module):  # an argument that is a pytree, with a static field
+    y: jax.Array
+    label: str = eqx.field(static=True)
+
 @compilation_cache.stored_program
 @functools.partial(jax.jit, static_argnames=("power",))
-def f(x, y, *, power):
+def f(x, pair, *, power):
     traces.append(1)
-    return {"value": jnp.sum(x**power) + y, "parts": (x * y, None)}
+    return {"value": jnp.sum(x**power) + pair.y, "parts": (x * pair.y, None)}
 
 with compilation_cache.keeping_programs():
-    out = f(jnp.arange(4.0), jnp.asarray(2.0), power=3)
-    again = f(jnp.arange(4.0), jnp.asarray(2.0), power=3)
+    out = f(jnp.arange(4.0), Pair(jnp.asarray(2.0), "y"), power=3)
+    again = f(jnp.arange(4.0), Pair(jnp.asarray(2.0), "y"), power=3)
 print(len(traces), float(out["value"]), out["parts"][0].tolist(), out["parts"][1],
       float(again["value"]))
 """
@@ -109,19 +114,30 @@ def test_a_damaged_stored_program_is_compiled_again(tmp_path):
 
 def test_models_under_a_stored_program_give_what_jit_gives(monkeypatch, tmp_path):
     # The normal model through its stored program (twice: stored, then loaded in this
-    # process), under jax.grad (traced: plain jit), and without the store.
+    # process), under jax.grad (traced: plain jit), and without the store; and `simulate`,
+    # whose scene and result conversions take equinox modules.
+    from barrierjax import scene_file, simulate
     from barrierjax.hinge import normal_impact
 
     monkeypatch.setenv("BARRIERJAX_CACHE_DIR", str(tmp_path / "cache"))
     args = (jnp.asarray(2.0), jnp.asarray(3.0), jnp.asarray(0.5))
     damage = lambda *a: normal_impact(*a, n_history=8).damage
+    scene = scene_file.default_scene()
     plain, plain_grad = damage(*args), jax.grad(damage)(*args)
+    plain_result = simulate(scene, n_history=8)
     with compilation_cache.keeping_programs() as folder:
         kept = [damage(*args) for _ in range(2)]
         kept_grad = jax.grad(damage)(*args)
-    assert [p.name.split("-")[0] for p in folder.iterdir()] == ["normal_impact"]
+        kept_results = [simulate(scene, n_history=8) for _ in range(2)]
+    assert {p.name.split("-")[0] for p in folder.iterdir()} == {
+        "normal_impact", "dimensionless", "in_units"
+    }
     assert all(float(k) == float(plain) for k in kept)
     assert float(kept_grad) == float(plain_grad)
+    for result in kept_results:
+        assert jax.tree.structure(result) == jax.tree.structure(plain_result)
+        for a, b in zip(jax.tree.leaves(result), jax.tree.leaves(plain_result)):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
 def test_nothing_is_kept_where_the_cache_is_off(monkeypatch):

@@ -178,6 +178,7 @@ def oblique_impact(
     return _with_rigid_barriers(result, yields, mu, phi, vn, vh, friction, n_history=n_history)
 
 
+@stored_program
 @functools.partial(jax.jit, static_argnames="n_history")
 def _with_rigid_barriers(solved: ObliqueImpact, yields, mu, phi, vn, vh, friction, *, n_history):
     """`solved` where the barrier `yields`, `rigid_barrier` elsewhere: one program (op by
