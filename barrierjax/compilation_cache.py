@@ -19,11 +19,11 @@ The persistent cache still traces and lowers a model before it finds the executa
 key is the lowered program): half a second for the oblique model, on every run of the
 command line. Within `keeping_programs()`, as the command line runs, the models' entry
 points (`stored_program`) also keep their compiled executables in `programs/` beside the
-cache, keyed by the arguments' shapes and types, the static options, the
+cache, keyed by the arguments' tree, shapes and types, the static options, the
 versions of jax, jaxlib, equinox and diffrax, the jax settings that change a trace, and a
 digest of barrierjax's own source: a later process that calls the same entry point with
-concrete arrays of the same shapes loads the executable and runs it, with no tracing or
-lowering at all. Calls under a caller's `jit`, `vmap` or `grad` (traced
+concrete arrays (or pytrees of them: a scene, a model's result) of the same shapes loads
+the executable and runs it, with no tracing or lowering at all. Calls under a caller's `jit`, `vmap` or `grad` (traced
 arguments) go through `jax.jit` as always.
 """
 
