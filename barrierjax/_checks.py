@@ -6,6 +6,7 @@ value never propagates silently into NaN.
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.core import Tracer
@@ -44,7 +45,19 @@ def check(name: str, value, predicate, rule: str):
         return eqx.error_if(checked, ~jnp.all(ok), f"{name} must be {rule}")
     if not np.all(ok):
         raise _fail(name, rule, value, ok)
-    return jnp.asarray(value, dtype=jnp.result_type(float))
+    return float_array(value)
+
+
+def float_array(value):
+    """`value` as an array of JAX's float type. A concrete one is put on the device as
+    it is (or converted on the host): `jnp.asarray` converts by an eager operation, a
+    program to compile, or to find in the cache, in each new process."""
+    dtype = jnp.result_type(float)
+    if _is_traced(value):
+        return jnp.asarray(value, dtype)
+    if isinstance(value, jax.Array) and value.dtype == dtype and not value.weak_type:
+        return value
+    return jax.device_put(np.asarray(value, dtype))
 
 
 def positive(name: str, value):

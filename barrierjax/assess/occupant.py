@@ -12,6 +12,7 @@ filters' padding); leading batch axes of the accelerations are mapped over.
 """
 
 import functools
+import math
 
 import equinox as eqx
 import jax
@@ -93,11 +94,16 @@ def sampling_step(t) -> float:
 @stored_program
 @functools.partial(jax.jit, static_argnames=("dt", "edition"))
 def _records(ax, ay, yaw_rate, az, flail_x, flail_y, t0, *, dt, edition):
-    """`_one_record` over the leading axis: one executable per record length and step
-    (the start time `t0` an argument: records that start at other times share it)."""
+    """`_one_record` of each record (the channels' last axis, their leading axes a batch
+    that broadcasts): one executable per shape and step (the start time `t0` an argument:
+    records that start at other times share it), broadcasts and reshapes included."""
+    channels = ax, ay, yaw_rate, az
+    shape = jnp.broadcast_shapes(*(c.shape for c in channels if c is not None))
+    rows = lambda c: None if c is None else jnp.broadcast_to(c, shape).reshape(-1, shape[-1])
     one = functools.partial(_one_record, dt=dt, edition=edition)
     in_axes = (0, 0, 0, 0, None, None, None)
-    return jax.vmap(one, in_axes=in_axes)(ax, ay, yaw_rate, az, flail_x, flail_y, t0)
+    risk = jax.vmap(one, in_axes=in_axes)(*map(rows, channels), flail_x, flail_y, t0)
+    return jax.tree.map(lambda leaf: leaf.reshape(shape[:-1]), risk)
 
 
 def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, t0, *, dt, edition):
@@ -162,21 +168,19 @@ def occupant_risk(
             raise ValueError(
                 f"{name} must have the samples of t on its last axis ({len(t)}); got shape {np.shape(x)}"
             )
+    finite = lambda x: abs(x) < math.inf  # NumPy's on a concrete record, JAX's on a traced one
     channels = {
-        name: _checks.check(name, x, jnp.isfinite, "finite (no NaN or inf)")
+        name: _checks.check(name, x, finite, "finite (no NaN or inf)")
         for name, x in channels.items()
     }
-    shape = jnp.broadcast_shapes(*(x.shape for x in channels.values()))
-    flat = {name: jnp.broadcast_to(x, shape).reshape(-1, shape[-1]) for name, x in channels.items()}
-    flail = jnp.asarray(flail_x, float), jnp.asarray(flail_y, float)
-    risk = _records(
-        flat["ax"],
-        flat["ay"],
-        flat.get("yaw_rate"),
-        flat.get("az"),
-        *flail,
-        jnp.asarray(t0, float),
+    return _records(
+        channels["ax"],
+        channels["ay"],
+        channels.get("yaw_rate"),
+        channels.get("az"),
+        _checks.float_array(flail_x),
+        _checks.float_array(flail_y),
+        _checks.float_array(t0),
         dt=dt,
         edition=asi_edition,
     )
-    return jax.tree.map(lambda leaf: leaf.reshape(shape[:-1]), risk)

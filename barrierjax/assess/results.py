@@ -84,5 +84,5 @@ def assess(
         raise ValueError("assess: the result has no history: simulate(scene, n_history>=2)")
     t = _grid(history, dt, t_end)
     velocities = history.time, history.vehicle_velocity, history.vehicle_tangential_velocity
-    ax, ay = _vehicle_axes_rows(*velocities, jnp.asarray(t), dt=dt)
+    ax, ay = _vehicle_axes_rows(*velocities, jax.device_put(t), dt=dt)
     return occupant_risk(t, ax, ay, asi_edition=asi_edition)

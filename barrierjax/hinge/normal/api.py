@@ -6,6 +6,7 @@ from typing import Literal
 import diffrax
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ... import _checks
 from ...compilation_cache import stored_program
@@ -109,14 +110,15 @@ def normal_impact(
     if method not in ("closed_form", "ode"):
         raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
     mu, phi, speed = checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history)
-    mu, phi, speed = jnp.broadcast_arrays(mu, phi, speed)
+    if not jnp.shape(mu) == jnp.shape(phi) == jnp.shape(speed):  # (else no program to run)
+        mu, phi, speed = jnp.broadcast_arrays(mu, phi, speed)
     options = dict(
         method=method,
         points=quadrature_points(rtol) if method == "closed_form" else None,
         n_history=int(n_history),
         solver=solver if solver is not None else diffrax.Tsit5(),
     )
-    rtol = jnp.asarray(rtol, mu.dtype)
+    rtol = jax.device_put(np.asarray(rtol, mu.dtype))  # (`jnp.asarray` would be a program)
     if mu.ndim == 0:
         return _normal_impact(mu, phi, speed, rtol, **options)
     chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, rtol, **options)

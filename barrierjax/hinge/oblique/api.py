@@ -38,14 +38,14 @@ def _tolerance(rtol, dtype):
     the dtype can meet where that is larger (float32: 1.2e-5)."""
     smallest = _ROUNDINGS * float(jnp.finfo(dtype).eps)
     if rtol is None:
-        return jnp.asarray(max(_DEFAULT_RTOL, smallest), dtype)
-    if rtol < smallest:
+        rtol = max(_DEFAULT_RTOL, smallest)
+    elif rtol < smallest:
         raise ValueError(
             f"rtol must be at least {smallest:.2g} in {jnp.dtype(dtype).name}; got {rtol!r} "
             "(pass a larger rtol, or enable float64: "
             'jax.config.update("jax_enable_x64", True))'
         )
-    return jnp.asarray(rtol, dtype)
+    return jax.device_put(np.asarray(rtol, dtype))  # (`jnp.asarray` would be a program)
 
 
 def _force_ratio(force_ratio):
@@ -152,12 +152,8 @@ def oblique_impact(
     vn = _checks.positive("normal_speed", normal_speed)
     vh = _checks.non_negative("tangential_speed", tangential_speed)
     friction = _checks.non_negative("friction", friction)
-    yields = phi > 1.0
-    safe_phi = jnp.where(yields, phi, 2.0)  # keeps the discarded lanes finite
-    args = jnp.broadcast_arrays(mu, safe_phi, vn, vh, friction)
-    rtol = _tolerance(rtol, args[0].dtype)
-    # Strongly typed: a Python number and an array of its dtype then run one program.
-    inputs = tuple(jnp.asarray(a, a.dtype) for a in args)
+    yields, inputs = _lanes(mu, phi, vn, vh, friction)
+    rtol = _tolerance(rtol, inputs[0].dtype)
 
     def solve(budget):
         options = {"max_steps": budget, "n_history": n_history, "n_x": _N_X}
@@ -176,6 +172,17 @@ def oblique_impact(
 
     result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
     return _with_rigid_barriers(result, yields, mu, phi, vn, vh, friction, n_history=n_history)
+
+
+@stored_program
+@jax.jit
+def _lanes(mu, phi, vn, vh, friction):
+    """Where the barrier yields, and the step loop's inputs: broadcast, strongly typed (a
+    Python number and an array of its dtype then run one program), and phi = 2 where it
+    does not yield, which keeps those lanes finite (their results are discarded)."""
+    yields = phi > 1.0
+    args = jnp.broadcast_arrays(mu, jnp.where(yields, phi, 2.0), vn, vh, friction)
+    return yields, tuple(jnp.asarray(a, a.dtype) for a in args)
 
 
 @stored_program
