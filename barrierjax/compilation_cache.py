@@ -23,8 +23,8 @@ cache, keyed by the arguments' tree, shapes and types, the static options, the
 versions of jax, jaxlib, equinox and diffrax, the jax settings that change a trace, and a
 digest of barrierjax's own source: a later process that calls the same entry point with
 concrete arrays (or pytrees of them: a scene, a model's result) of the same shapes loads
-the executable and runs it, with no tracing or lowering at all. Calls under a caller's `jit`, `vmap` or `grad` (traced
-arguments) go through `jax.jit` as always.
+the executable and runs it, with no tracing or lowering at all. Calls under a caller's
+`jit`, `vmap` or `grad` (traced arguments) go through `jax.jit` as always.
 """
 
 from __future__ import annotations
