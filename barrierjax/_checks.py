@@ -41,18 +41,17 @@ def check(name: str, value, predicate, rule: str):
     with np.errstate(invalid="ignore"):
         ok = predicate(array)
     if _is_traced(ok):  # a concrete value against a traced bound
-        checked = jnp.asarray(value, dtype=jnp.result_type(float))
-        return eqx.error_if(checked, ~jnp.all(ok), f"{name} must be {rule}")
+        return eqx.error_if(float_array(value), ~jnp.all(ok), f"{name} must be {rule}")
     if not np.all(ok):
         raise _fail(name, rule, value, ok)
     return float_array(value)
 
 
-def float_array(value):
-    """`value` as an array of JAX's float type. A concrete one is put on the device as
-    it is (or converted on the host): `jnp.asarray` converts by an eager operation, a
-    program to compile, or to find in the cache, in each new process."""
-    dtype = jnp.result_type(float)
+def float_array(value, dtype=None):
+    """`value` as an array of `dtype` (default JAX's float type). A concrete one is put on
+    the device as it is (or converted on the host): `jnp.asarray` converts by an eager
+    operation, a program to compile, or to find in the cache, in each new process."""
+    dtype = jnp.result_type(float) if dtype is None else dtype
     if _is_traced(value):
         return jnp.asarray(value, dtype)
     if isinstance(value, jax.Array) and value.dtype == dtype and not value.weak_type:

@@ -6,7 +6,6 @@ from typing import Literal
 import diffrax
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from ... import _checks
 from ...compilation_cache import stored_program
@@ -118,7 +117,7 @@ def normal_impact(
         n_history=int(n_history),
         solver=solver if solver is not None else diffrax.Tsit5(),
     )
-    rtol = jax.device_put(np.asarray(rtol, mu.dtype))  # (`jnp.asarray` would be a program)
+    rtol = _checks.float_array(rtol, mu.dtype)
     if mu.ndim == 0:
         return _normal_impact(mu, phi, speed, rtol, **options)
     chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, rtol, **options)

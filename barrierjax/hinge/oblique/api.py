@@ -45,7 +45,7 @@ def _tolerance(rtol, dtype):
             "(pass a larger rtol, or enable float64: "
             'jax.config.update("jax_enable_x64", True))'
         )
-    return jax.device_put(np.asarray(rtol, dtype))  # (`jnp.asarray` would be a program)
+    return _checks.float_array(rtol, dtype)
 
 
 def _force_ratio(force_ratio):
