@@ -11,6 +11,7 @@ every plastic zone was up to 1.5e-2 off).
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ..._custom_types import Scalar
 from ..._solve.recorded_rk import Recording, Solution
@@ -204,12 +205,23 @@ def build_history(samples, count, p: Params, n_x, n_history) -> ObliqueImpactHis
         deflected_shape=displacement_field(samples, count, x),
     )
     t = jnp.linspace(time[0], time[count - 1], n_history)
+    # Every quantity in one interpolation, side by side: the sample times are searched once
+    # (a search each made the program a tenth larger, to compile and to load).
+    columns = [values.reshape(values.shape[0], -1) for values in steps.values()]
     at_t = jax.vmap(jnp.interp, in_axes=(None, None, 1), out_axes=1)
-    resampled = {
-        name: (at_t if values.ndim == 2 else jnp.interp)(t, time, values)
-        for name, values in steps.items()
-    }
-    return ObliqueImpactHistory(time=t, x=x, **resampled)
+    resampled = jnp.split(
+        at_t(t, time, jnp.concatenate(columns, axis=1)),
+        np.cumsum([c.shape[1] for c in columns[:-1]]),
+        axis=1,
+    )
+    return ObliqueImpactHistory(
+        time=t,
+        x=x,
+        **{
+            name: r if values.ndim == 2 else r[:, 0]
+            for (name, values), r in zip(steps.items(), resampled)
+        },
+    )
 
 
 def _speed(normal, tangential):
