@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from barrierjax._solve.recorded_rk import _locate, _stored, _tied
+from barrierjax._solve.recorded_rk import _A, _locate, _stored, _tied
 
 
 def _located_time(a, b, h):
@@ -63,3 +63,13 @@ def test_stored_values_and_tangents_are_unchanged(h):
     direction = jnp.arange(7.0) / 3.0
     _, tangent = jax.jvp(lambda v: _stored(v, jnp.asarray(h)), (values,), (direction,))
     np.testing.assert_array_equal(np.asarray(tangent), np.asarray(direction))
+
+
+def test_the_stages_are_diffrax_dopri5s():
+    # Written out in the module (so that importing barrierjax does not import diffrax); the
+    # same doubles as diffrax's tableau, the last row its fifth-order solution.
+    import diffrax
+
+    tableau = diffrax.Dopri5.tableau
+    assert _A[1:] == [[float(w) for w in row] for row in tableau.a_lower]
+    assert _A[-1] == [float(w) for w in tableau.b_sol[:-1]] and tableau.b_sol[-1] == 0.0

@@ -4,14 +4,23 @@ A phase is a pure vector field plus a real-valued switching function; the phase 
 where that function crosses zero, located by a Newton root find on the solver's dense
 interpolant so that the switching time carries an exact gradient (a boolean event would
 give a zero one).
+
+diffrax and optimistix are imported where a phase is solved (traced), not with the module:
+a process that only loads compiled programs never needs them (`barrierjax` imports them on
+first use, about 0.3 s of a second run of the command line).
 """
 
-import diffrax
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 from jaxtyping import Array, Bool, Float, Int, PyTree
+
+if TYPE_CHECKING:
+    import diffrax
 
 
 class PhaseSolution(eqx.Module):
@@ -48,6 +57,9 @@ def solve_phase(
     `switch_required` is False: the phase then ends at the first of the two, and
     `switched` says which.
     """
+    import diffrax
+    import optimistix as optx
+
     event = None
     if switch is not None:
         # The switch is located on the dense interpolant, itself accurate to about rtol;

@@ -23,7 +23,6 @@ a while loop.
 
 from collections.abc import Callable
 
-import diffrax
 import equinox as eqx
 import equinox.internal as eqxi
 import jax
@@ -34,13 +33,23 @@ from jaxtyping import Array, Bool, Float, Int, PyTree
 
 from .hermite import Quintic
 
-# Dormand & Prince (1980): the stages of diffrax.Dopri5 (the last row is the fifth-order
-# solution, first-same-as-last) and, for the error, the paper's own embedded fourth-order
-# pair, b5 - b4 with b4 = (5179/57600, 0, 7571/16695, 393/640, -92097/339200, 187/2100,
-# 1/40). diffrax.Dopri5's b_error is 2/3 of it (another embedded pair): with it the same
-# rtol would take steps about 8 % longer. The vector fields are autonomous (time is a
-# state), so the stages' nodes c are not needed.
-_A = [[], *([float(w) for w in row] for row in diffrax.Dopri5.tableau.a_lower)]
+# Dormand & Prince (1980): the stages, as diffrax.Dopri5 has them (the last row is the
+# fifth-order solution, first-same-as-last; tests/test_recorded_rk.py compares them), and,
+# for the error, the paper's own embedded fourth-order pair, b5 - b4 with b4 = (5179/57600,
+# 0, 7571/16695, 393/640, -92097/339200, 187/2100, 1/40). diffrax.Dopri5's b_error is 2/3
+# of it (another embedded pair): with it the same rtol would take steps about 8 % longer.
+# The vector fields are autonomous (time is a state), so the stages' nodes c are not
+# needed. (Written out, not read from diffrax, so that importing the package does not
+# import diffrax: see `_solve.phases`.)
+_A = [
+    [],
+    [1 / 5],
+    [3 / 40, 9 / 40],
+    [44 / 45, -56 / 15, 32 / 9],
+    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729],
+    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
+    [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84],
+]
 _B_ERROR = np.array(
     [
         35 / 384 - 5179 / 57600,

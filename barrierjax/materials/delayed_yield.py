@@ -40,11 +40,9 @@ just outside two-significant-figure rounding of the printed values (at most
 77,500/59,500 = 1.3025). `tests/test_delayed_yield.py` recomputes all of these numbers.
 """
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 
 from .. import _checks
 from .._solve.quadrature import gauss_legendre_unit
@@ -207,6 +205,9 @@ def delay_time_of(stress_fn, t_max, args=None, *, sigma0, A, d, beta, rtol=1e-10
 
 @eqx.filter_jit
 def _delay_time_of(stress_fn, t_max, args, sigma0, A, d, beta, rtol):
+    import diffrax  # (on first use: see `_solve.phases`)
+    import optimistix as optx
+
     def vector_field(t, _, args):
         return _rate(stress_fn(t, args), sigma0, A, d, beta)
 

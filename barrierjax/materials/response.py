@@ -7,7 +7,6 @@ exact for the converged backward-Euler and return-mapping updates). Overstress l
 offer `explicit_update`, `report_update` and the vector field `plastic_rate`.
 """
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -65,8 +64,12 @@ def _by_steps(law, times, strains, step, substeps, initial):
 
 
 def _by_diffrax(law, times, strains, initial, rtol, atol, max_steps, adjoint):
+    import diffrax  # (on first use: see `_solve.phases`)
+
     if not hasattr(law, "plastic_rate"):
         raise ValueError(f"method must be 'implicit' for {type(law).__name__}; got 'diffrax'")
+    if adjoint is None:
+        adjoint = diffrax.RecursiveCheckpointAdjoint()
     slopes = jnp.diff(strains) / jnp.diff(times)
     last = times.shape[0] - 2
 
@@ -137,7 +140,6 @@ def uniaxial_response(
     initial = law.update(zero, law.init_state(), strains[0], zero)
 
     if method == "diffrax":
-        adjoint = diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint
         stress = _by_diffrax(law, times, strains, initial, rtol, atol, max_steps, adjoint)
     else:
         step = _stepper(law, method, iterations)

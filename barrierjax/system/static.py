@@ -19,7 +19,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 
 from .._checks import positive
 from ..beam.element import hermite_shape
@@ -81,6 +80,8 @@ def _point_load(g: Guardrail, x):
 
 @eqx.filter_jit
 def _pushover(g: Guardrail, force, pattern, dofs, shape, factors, dt, rtol):
+    import optimistix as optx  # (on first use: see `_solve.phases`)
+
     stress, state = init_sections(g.rail)
     n_posts = len(g.post_nodes)
     solver = optx.Newton(rtol=rtol, atol=rtol)

@@ -61,7 +61,6 @@ is then a plastic string (3.4.45), which `string.py` carries to rest from the in
 conditions (3.4.46) built here.
 """
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -232,6 +231,8 @@ def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
     end. The samples are the step ends, so `diffeqsolve`'s step-size control, event
     handling and interpolation onto saved times have nothing to do here; without them
     the model's first call compiles in a quarter less time."""
+    import diffrax  # (on first use: see `_solve.phases`)
+
     name, offset = hinge
 
     def traced(t, state, args):
@@ -427,7 +428,10 @@ def axial_stages(
     below 1), `string_work` and the string's flow-rule check and, with `n_history`,
     `history`: samples per phase and the state at rest, in the fields of `normal`'s
     histories plus `axial_force`."""
-    solver = diffrax.Tsit5() if solver is None else solver
+    if solver is None:
+        import diffrax  # (on first use: see `_solve.phases`)
+
+        solver = diffrax.Tsit5()
     root = jnp.sqrt(phi**2 + 3.0)
     p = _Params(mu, phi, eta, 3.0 / (root + phi))
     first, second, string_in_first, locked = _beam_phases(

@@ -1,9 +1,10 @@
 """`normal_impact`, the public function of report 3.2."""
 
-import functools
-from typing import Literal
+from __future__ import annotations
 
-import diffrax
+import functools
+from typing import TYPE_CHECKING, Literal
+
 import jax
 import jax.numpy as jnp
 
@@ -14,6 +15,9 @@ from ..._solve.sensitivity import forward_jacobian_jvp
 from .closed_form import quadrature_points, solve_closed_form
 from .ode import solve_ode
 from .results import NormalImpact, finish_history, normal_result, rigid_barrier
+
+if TYPE_CHECKING:
+    import diffrax
 
 
 _STATIC = ("method", "points", "n_history", "solver")
@@ -57,6 +61,15 @@ def _normal_impact(mu, phi, speed, rtol, *, method, points, n_history, solver):
     )
     rigid = rigid_barrier(mu, phi, speed, n_history)
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+
+
+def _ode_solver(solver):
+    """`solver`, or diffrax's Tsit5 (diffrax imported on first use: see `_solve.phases`)."""
+    if solver is not None:
+        return solver
+    import diffrax
+
+    return diffrax.Tsit5()
 
 
 def checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history):
@@ -115,7 +128,7 @@ def normal_impact(
         method=method,
         points=quadrature_points(rtol) if method == "closed_form" else None,
         n_history=int(n_history),
-        solver=solver if solver is not None else diffrax.Tsit5(),
+        solver=_ode_solver(solver) if method == "ode" else None,
     )
     rtol = _checks.float_array(rtol, mu.dtype)
     if mu.ndim == 0:
