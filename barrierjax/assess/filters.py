@@ -59,10 +59,11 @@ CFC_PAD_SECONDS = 0.010  # J211-1 Appendix C: extend each end by at least 10 ms
 ASI_CUTOFF = 13.0  # Hz, EN 1317-1:2010 clause on ASI
 
 
-def butterworth_coefficients(f_design, dt):
+def butterworth_coefficients(f_design, dt, xp=jnp):
     """(a0, a1, a2, b1, b2) of one 2-pole pass (SAE J211-1 Appendix C, Equation C1) with
-    design (-3 dB per pass) frequency `f_design` (Hz) at the sampling step `dt` (s)."""
-    wa = jnp.tan(jnp.pi * f_design * dt)
+    design (-3 dB per pass) frequency `f_design` (Hz) at the sampling step `dt` (s), in
+    the array module `xp` (jax.numpy, or numpy for concrete values)."""
+    wa = xp.tan(xp.pi * f_design * dt)
     denominator = 1.0 + math.sqrt(2.0) * wa + wa**2
     a0 = wa**2 / denominator
     b1 = -2.0 * (wa**2 - 1.0) / denominator
@@ -159,9 +160,9 @@ def _fast_length(n: int) -> int:
 def filter_gain(f, dt, f_design):
     """The steady-state gain (ratio, not dB) of `phaseless_lowpass` at frequency `f` (Hz):
     the square of one pass's |H(exp(i 2 pi f dt))|, exact for the digital filter."""
-    with jax.ensure_compile_time_eval():  # concrete even where called under jit
-        coefficients = butterworth_coefficients(f_design, dt)
-    a0, a1, a2, b1, b2 = (np.asarray(c, dtype=float) for c in coefficients)
+    # In NumPy: concrete even where called under jit, and no JAX program to compile each
+    # time a record's length is new (six of them, with `jax.ensure_compile_time_eval`).
+    a0, a1, a2, b1, b2 = butterworth_coefficients(float(f_design), dt, xp=np)
     z = np.exp(-2j * np.pi * np.asarray(f, dtype=float) * dt)
     h = (a0 + a1 * z + a2 * z**2) / (1.0 - b1 * z - b2 * z**2)
     return np.abs(h) ** 2
