@@ -62,6 +62,46 @@ def test_records_of_one_rate_share_a_program_whatever_their_start(compilations):
     assert float(early.oiv_x) == float(at_zero.oiv_x)
 
 
+def test_records_of_nearby_lengths_share_a_program_and_read_as_unpadded(compilations):
+    """Records are padded with zeros to `record_size` (two sizes an octave) and read as
+    ending at their own last sample: a record of another length and the same size runs the
+    same program, and every metric equals the unpadded record's (after it the vehicle moves
+    on freely), with the impact within the record or after its end, both ASI editions."""
+    from barrierjax.assess.occupant import _one_record, record_size
+
+    sizes = [record_size(n) for n in (3, 64, 65, 96, 97, 1000, 1024, 1025, 5001)]
+    assert sizes == [64, 64, 96, 96, 128, 1024, 1024, 1536, 6144]
+    rng = np.random.default_rng(0)
+
+    def record(n, amplitude):
+        t = T[:n]
+        noise = lambda scale: rng.normal(0.0, scale, n)
+        ax = np.asarray(half_sine(-amplitude, 0.08, t)) + noise(3.0)
+        ay = np.asarray(half_sine(0.4 * amplitude, 0.06, t)) + noise(3.0)
+        return t, ax, ay, np.asarray(half_sine(1.5, 0.08, t)), noise(8.0)
+
+    within, after = record(1100, 300.0), record(1300, 40.0)  # both padded to 1536
+    within[1][-1] -= 1500.0  # a spike at the last sample: the windows that end past it read
+    within[2][-1] += 800.0  # zeros there, not a ramp down to the padding's first sample
+    risks = {}
+    with compilations() as programs:
+        for name, channels in (("within", within), ("after", after)):
+            for edition in ("2010", "1998"):
+                risks[name, edition] = occupant_risk(*channels, asi_edition=edition)
+    assert sum("_records" in m for m in programs) == 2, programs  # one program an edition
+    assert bool(risks["within", "2010"].impact_in_record)
+    assert not bool(risks["after", "2010"].impact_in_record)
+    for (name, edition), risk in risks.items():
+        t, *channels = within if name == "within" else after
+        unpadded = _one_record(
+            *map(jnp.asarray, channels), 0.6, 0.3, 0.0, jnp.int32(t.size), dt=DT, edition=edition
+        )
+        for field in risk.__dataclass_fields__:
+            np.testing.assert_allclose(
+                getattr(risk, field), getattr(unpadded, field), rtol=1e-10, err_msg=field
+            )
+
+
 def test_lateral_constant_acceleration_reaches_the_side_first():
     a = 40.0  # to the left: the occupant moves right, 0.3 m at sqrt(0.6 / a)
     r = occupant_risk(T, np.zeros_like(T), np.full_like(T, a))

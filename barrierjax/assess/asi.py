@@ -25,19 +25,20 @@ ASI_AVERAGE_1998 = 0.050  # s: EN 1317-1:1998's moving average
 EDITIONS = ("2010", "1998")
 
 
-def conditioned_accelerations(a, dt, edition: str = "2010"):
-    """The acceleration components `a` (..., 3, n) as the ASI of `edition` reads them."""
+def conditioned_accelerations(a, dt, edition: str = "2010", end=None):
+    """The acceleration components `a` (..., 3, n) as the ASI of `edition` reads them (the
+    record ends at `end`, default its last sample; zeros after it)."""
     if edition == "2010":
         return filters.zero_padded_lowpass(a, dt, filters.ASI_CUTOFF, pad_seconds=ASI_PAD_SECONDS)
     if edition == "1998":
-        return filters.moving_average(a, dt, ASI_AVERAGE_1998)
+        return filters.moving_average(a, dt, ASI_AVERAGE_1998, end)
     raise ValueError(f"asi_edition must be one of {EDITIONS}; got {edition!r}")
 
 
-def asi_history(ax, ay, az, dt, edition: str = "2010"):
+def asi_history(ax, ay, az, dt, edition: str = "2010", end=None):
     """ASI(t) at every sample of one record (arrays of n samples at step `dt`; `az` None
-    for none)."""
+    for none; the record ends at `end`, default its last sample, zeros after it)."""
     channels = [ax, ay] if az is None else [ax, ay, az]
-    conditioned = conditioned_accelerations(jnp.stack(channels), dt, edition)
+    conditioned = conditioned_accelerations(jnp.stack(channels), dt, edition, end)
     limits = jnp.asarray(ASI_LIMITS[: len(channels)], dtype=conditioned.dtype)[:, None]
     return signals.safe_norm(conditioned / limits, axis=0)

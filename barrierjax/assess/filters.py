@@ -168,14 +168,15 @@ def filter_gain(f, dt, f_design):
     return np.abs(h) ** 2
 
 
-def moving_average(x, dt, window: float):
+def moving_average(x, dt, window: float, end=None):
     """The centred moving average over `window` seconds of the piecewise-linear interpolant
     of `x` (samples along the last axis at step `dt`), at every sample, with x = 0 outside
-    the record: EN 1317-1:1998's 50 ms average of the ASI. Exact integrals."""
+    the record (which ends at `end`, default its last sample): EN 1317-1:1998's 50 ms
+    average of the ASI. Exact integrals."""
 
     def one(x):
         t = jnp.arange(x.shape[-1], dtype=x.dtype) * dt
-        integral = signals.integral_at(x, dt)
+        integral = signals.integral_at(x, dt, end)
         return (integral(t + 0.5 * window) - integral(t - 0.5 * window)) / window
 
     return jnp.vectorize(one, signature="(n)->(n)")(jnp.asarray(x))

@@ -37,19 +37,23 @@ def occupant_motion(ax, ay, dt):
     return -jnp.stack([dx, dy], -1), -jnp.stack([vx, vy], -1)
 
 
-def flail_space(ax, ay, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y):
-    """Occupant impact of one record sampled at `dt` (s from its first sample): (t_impact,
+def flail_space(ax, ay, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y, n_real=None):
+    """Occupant impact of one record sampled at `dt` (s from its first sample; of its
+    samples the first `n_real` are the record's, default all, the rest padding): (t_impact,
     oiv (2,), in_record). Without an impact (the occupant at rest relative to the vehicle
     at the record's end) t_impact is +inf and oiv zero."""
     position, velocity = occupant_motion(ax, ay, dt)
+    if n_real is not None:
+        position, velocity = signals.continued(position, velocity, n_real, dt)
     limits = jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)])
-    return signals.first_impact(position, velocity, limits, dt)
+    return signals.first_impact(position, velocity, limits, dt, n_real)
 
 
-def ridedown(ax, ay, dt, t_impact, window=RIDEDOWN_WINDOW):
+def ridedown(ax, ay, dt, t_impact, window=RIDEDOWN_WINDOW, end=None):
     """ORA: the largest |10 ms average| of each acceleration component after `t_impact`
-    (windows starting at it or at a later sample): (ora_x, ora_y), zero without impact."""
+    (windows starting at it or at a later sample; the record ends at `end`, default its
+    last sample): (ora_x, ora_y), zero without impact."""
     return (
-        signals.max_window_mean(ax, dt, window, t_impact),
-        signals.max_window_mean(ay, dt, window, t_impact),
+        signals.max_window_mean(ax, dt, window, t_impact, end),
+        signals.max_window_mean(ay, dt, window, t_impact, end),
     )

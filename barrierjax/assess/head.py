@@ -40,16 +40,20 @@ def head_motion(ax, ay, yaw_rate, dt):
     return jnp.stack([x, y], -1), jnp.stack([u, w], -1)
 
 
-def head_impact(ax, ay, yaw_rate, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y):
-    """(t_head, thiv, in_record) of one record: when the theoretical head strikes and its
-    speed relative to the vehicle then (m/s); +inf and zero without an impact."""
+def head_impact(ax, ay, yaw_rate, dt, flail_x=FLAIL_X, flail_y=FLAIL_Y, n_real=None):
+    """(t_head, thiv, in_record) of one record (its first `n_real` samples, default all,
+    the rest padding): when the theoretical head strikes and its speed relative to the
+    vehicle then (m/s); +inf and zero without an impact."""
     position, velocity = head_motion(ax, ay, yaw_rate, dt)
+    if n_real is not None:
+        position, velocity = signals.continued(position, velocity, n_real, dt)
     limits = jnp.stack([jnp.asarray(flail_x), jnp.asarray(flail_y)])
-    t_head, relative, in_record = signals.first_impact(position, velocity, limits, dt)
+    t_head, relative, in_record = signals.first_impact(position, velocity, limits, dt, n_real)
     return t_head, signals.safe_norm(relative), in_record
 
 
-def post_impact_head_deceleration(ax, ay, dt, t_head, window=RIDEDOWN_WINDOW):
-    """PHD: the largest 10 ms average of the resultant of (ax, ay) after `t_head`."""
+def post_impact_head_deceleration(ax, ay, dt, t_head, window=RIDEDOWN_WINDOW, end=None):
+    """PHD: the largest 10 ms average of the resultant of (ax, ay) after `t_head` (the
+    record ends at `end`, default its last sample)."""
     resultant = signals.safe_norm(jnp.stack([ax, ay], -1))
-    return signals.max_window_mean(resultant, dt, window, t_head)
+    return signals.max_window_mean(resultant, dt, window, t_head, end)

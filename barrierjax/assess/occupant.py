@@ -27,7 +27,7 @@ from .asi import EDITIONS, asi_history
 from .flail import FLAIL_X, FLAIL_Y, flail_space, ridedown
 from .head import head_impact, post_impact_head_deceleration
 
-__all__ = ["OccupantRisk", "occupant_risk", "sampling_step"]
+__all__ = ["OccupantRisk", "occupant_risk", "record_size", "sampling_step"]
 
 Metric = Float[Array, "..."]
 
@@ -91,28 +91,59 @@ def sampling_step(t) -> float:
     return float(f"{dt:.12g}")
 
 
+def record_size(n: int) -> int:
+    """The length a record of `n` samples is padded to (with zeros, read as past its end):
+    the first of 64, 96, 128, 192, 256, 384, ... (2^k and 3 2^(k-1)) that holds it, so
+    that records of nearby lengths share one compiled program, at most half again as long.
+    A model's history of another duration, or another crash test's record, then compiles
+    nothing new (`_records` took 0.5 s to compile for each length, 2 cores)."""
+    size = 64
+    while size < n:
+        size = size * 3 // 2 if size & (size - 1) == 0 else size * 4 // 3
+    return size
+
+
+def _padded(x, size: int):
+    """`x` with zeros after its last sample (last axis) up to `size` samples: in NumPy
+    where concrete (no JAX program to compile), in JAX where traced."""
+    widths = [(0, 0)] * (np.ndim(x) - 1) + [(0, size - np.shape(x)[-1])]
+    return jnp.pad(x, widths) if isinstance(x, Tracer) else np.pad(np.asarray(x), widths)
+
+
 @stored_program
 @functools.partial(jax.jit, static_argnames=("dt", "edition"))
-def _records(ax, ay, yaw_rate, az, flail_x, flail_y, t0, *, dt, edition):
-    """`_one_record` of each record (the channels' last axis, their leading axes a batch
-    that broadcasts): one executable per shape and step (the start time `t0` an argument:
-    records that start at other times share it), broadcasts and reshapes included."""
+def _records(ax, ay, yaw_rate, az, flail_x, flail_y, t0, n_real, *, dt, edition):
+    """`_one_record` of each record (the channels' last axis, padded after the first
+    `n_real` samples; their leading axes a batch that broadcasts): one executable per
+    padded shape and step (the start time `t0` and the length `n_real` arguments: records
+    that start at other times, or of other lengths padded alike, share it), broadcasts and
+    reshapes included."""
     channels = ax, ay, yaw_rate, az
     shape = jnp.broadcast_shapes(*(c.shape for c in channels if c is not None))
     rows = lambda c: None if c is None else jnp.broadcast_to(c, shape).reshape(-1, shape[-1])
     one = functools.partial(_one_record, dt=dt, edition=edition)
-    in_axes = (0, 0, 0, 0, None, None, None)
-    risk = jax.vmap(one, in_axes=in_axes)(*map(rows, channels), flail_x, flail_y, t0)
+    in_axes = (0, 0, 0, 0, None, None, None, None)
+    risk = jax.vmap(one, in_axes=in_axes)(*map(rows, channels), flail_x, flail_y, t0, n_real)
     return jax.tree.map(lambda leaf: leaf.reshape(shape[:-1]), risk)
 
 
-def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, t0, *, dt, edition):
-    t_impact, oiv, in_record = flail_space(ax, ay, dt, flail_x, flail_y)
-    ora_x, ora_y = ridedown(ax, ay, dt, t_impact)
+def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, t0, n_real, *, dt, edition):
+    # The record is its first n_real samples; after them the vehicle moves on freely, as
+    # after any record: its accelerations zero, the occupant's and the head's paths straight.
+    real = jnp.arange(ax.shape[-1], dtype=n_real.dtype) < n_real
+    ax, ay, yaw_rate, az = (
+        None if c is None else jnp.where(real, c, 0.0) for c in (ax, ay, yaw_rate, az)
+    )
+    end = (n_real - 1).astype(ax.dtype) * dt
+    t_impact, oiv, in_record = flail_space(ax, ay, dt, flail_x, flail_y, n_real)
+    ora_x, ora_y = ridedown(ax, ay, dt, t_impact, end=end)
     if yaw_rate is None:  # the head moves as the flail-space occupant
         t_head, thiv, head_in_record = t_impact, jnp.hypot(oiv[0], oiv[1]), in_record
     else:
-        t_head, thiv, head_in_record = head_impact(ax, ay, yaw_rate, dt, flail_x, flail_y)
+        t_head, thiv, head_in_record = head_impact(
+            ax, ay, yaw_rate, dt, flail_x, flail_y, n_real
+        )
+    asi = jnp.where(real, asi_history(ax, ay, az, dt, edition, end), 0.0)
     return OccupantRisk(
         t_impact=t0 + t_impact,
         oiv_x=oiv[0],
@@ -121,8 +152,8 @@ def _one_record(ax, ay, yaw_rate, az, flail_x, flail_y, t0, *, dt, edition):
         ora_y=ora_y,
         t_head=t0 + t_head,
         thiv=thiv,
-        phd=post_impact_head_deceleration(ax, ay, dt, t_head),
-        asi=jnp.max(asi_history(ax, ay, az, dt, edition)),  # az None: two channels
+        phd=post_impact_head_deceleration(ax, ay, dt, t_head, end=end),
+        asi=jnp.max(asi),  # az None: two channels
         impact_in_record=in_record,
         head_impact_in_record=head_in_record,
     )
@@ -169,8 +200,9 @@ def occupant_risk(
                 f"{name} must have the samples of t on its last axis ({len(t)}); got shape {np.shape(x)}"
             )
     finite = lambda x: abs(x) < math.inf  # NumPy's on a concrete record, JAX's on a traced one
+    size = record_size(len(t))
     channels = {
-        name: _checks.check(name, x, finite, "finite (no NaN or inf)")
+        name: _checks.check(name, _padded(x, size), finite, "finite (no NaN or inf)")
         for name, x in channels.items()
     }
     return _records(
@@ -181,6 +213,7 @@ def occupant_risk(
         _checks.float_array(flail_x),
         _checks.float_array(flail_y),
         _checks.float_array(t0),
+        jax.device_put(np.int32(len(t))),
         dt=dt,
         edition=asi_edition,
     )

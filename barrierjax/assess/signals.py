@@ -8,13 +8,16 @@ cubic, so that a cubic Hermite interpolant through the samples of the displaceme
 slope (the velocity) is the displacement exactly, and a crossing time found on it is exact for
 the sampled record. Outside the record the acceleration is zero: before it the vehicle is
 unaccelerated, after it the vehicle moves on freely (a model's history ends at rest or at exit).
-Functions take one record (1-D arrays); `jax.vmap` batches them.
+Functions take one record (1-D arrays); `jax.vmap` batches them. A record padded past its
+end (so that records of nearby lengths share one compiled program) is read through its
+`end` (the last real sample's time) and `continued` past it.
 """
 
 import jax
 import jax.numpy as jnp
 
 __all__ = [
+    "continued",
     "cumulative_integrals",
     "first_crossing",
     "first_crossings",
@@ -43,13 +46,14 @@ def _interval(tau, dt, n: int):
     return i, jnp.clip(tau - i.astype(tau.dtype) * dt, 0.0, dt)
 
 
-def integral_at(a, dt):
+def integral_at(a, dt, end=None):
     """The function tau -> integral of `a` from the first sample to `tau` (s after it), with
-    a = 0 outside the record. Differentiable in `a` and `tau`."""
+    a = 0 outside the record, which ends at `end` (s; default its last sample).
+    Differentiable in `a` and `tau`."""
     v, _ = cumulative_integrals(a, dt)
 
     def integral(tau):
-        i, s = _interval(tau, dt, a.shape[0])
+        i, s = _interval(tau if end is None else jnp.minimum(tau, end), dt, a.shape[0])
         inside = v[i] + a[i] * s + 0.5 * (a[i + 1] - a[i]) * s**2 / dt
         return jnp.where(tau <= 0.0, 0.0, inside)
 
@@ -87,16 +91,29 @@ def hermite_at(position, velocity, dt):
     return at
 
 
-def first_crossings(position, velocity, limits, dt):
+def continued(position, velocity, n_real, dt):
+    """`position` and `velocity` (axis 0 time) with the samples from `n_real` on replaced
+    by the straight line from sample `n_real` - 1 at its velocity: a padded record's path,
+    continued past its end as the path runs on straight after a record."""
+    k = jnp.arange(position.shape[0], dtype=jnp.result_type(n_real))
+    last = n_real - 1
+    real = (k < n_real).reshape(-1, *(1,) * (position.ndim - 1))
+    elapsed = ((k - last).astype(position.dtype) * dt).reshape(real.shape)
+    line = position[last] + elapsed * velocity[last]
+    return jnp.where(real, position, line), jnp.where(real, velocity, velocity[last])
+
+
+def first_crossings(position, velocity, limits, dt, n_real=None):
     """`first_crossing` of each component: position and velocity (n, k), limits (k,)."""
-    return jax.vmap(first_crossing, in_axes=(1, 1, 0, None))(position, velocity, limits, dt)
+    crossing = lambda p, v, limit: first_crossing(p, v, limit, dt, n_real=n_real)
+    return jax.vmap(crossing, in_axes=(1, 1, 0))(position, velocity, limits)
 
 
-def first_crossing(position, velocity, limit, dt, newton_steps: int = 6):
+def first_crossing(position, velocity, limit, dt, newton_steps: int = 6, n_real=None):
     """When the 1-D path (`position` samples, slopes `velocity`, on `hermite_at`'s
     interpolant) first reaches |position| = `limit`: (time from the first sample, whether
-    within the record). Past the record the path runs on straight; a path that never
-    reaches the limit gives +inf.
+    within the record: its first `n_real` samples, default all). Past the record the path
+    runs on straight; a path that never reaches the limit gives +inf.
 
     The crossing's sample interval is found by comparison (piecewise constant), the time
     in it by Newton's method on the interpolant; the last Newton step is taken with the
@@ -132,26 +149,29 @@ def first_crossing(position, velocity, limit, dt, newton_steps: int = 6):
     lower, upper = jax.lax.stop_gradient((lower, upper))
     tau = jax.lax.fori_loop(0, newton_steps, iterate, jax.lax.stop_gradient(guess))
     tau = newton(jax.lax.stop_gradient(tau))
+    if n_real is not None:  # (a padded record: a crossing on its padding is past the end)
+        in_record = in_record & (k < jnp.asarray(n_real).astype(k.dtype))
     return jnp.where(never, jnp.inf, tau), in_record
 
 
-def first_impact(position, velocity, limits, dt):
+def first_impact(position, velocity, limits, dt, n_real=None):
     """When a 2-D path (samples `position`, `velocity`, (n, 2)) first reaches
     |component k| = `limits[k]` on either axis: (time, the velocity then (2,), whether
-    within the record); +inf and a zero velocity without an impact."""
-    (t_x, t_y), (in_x, in_y) = first_crossings(position, velocity, limits, dt)
+    within the record, its first `n_real` samples); +inf and a zero velocity without an
+    impact."""
+    (t_x, t_y), (in_x, in_y) = first_crossings(position, velocity, limits, dt, n_real)
     t_hit = jnp.minimum(t_x, t_y)
     finite = jnp.isfinite(t_hit)
     _, at_hit = hermite_at(position, velocity, dt)(jnp.where(finite, t_hit, 0.0))
     return t_hit, jnp.where(finite, at_hit, 0.0), jnp.where(t_x <= t_y, in_x, in_y)
 
 
-def max_window_mean(a, dt, window: float, t_from):
+def max_window_mean(a, dt, window: float, t_from, end=None):
     """The largest |mean| of the piecewise-linear `a` over `window` seconds among the
-    windows that start at `t_from` or at a later sample (a = 0 past the record); 0 when
-    `t_from` is +inf. The mean over a window starting at `t_from` makes it continuous and
-    differentiable in `t_from`."""
-    integral = integral_at(a, dt)
+    windows that start at `t_from` or at a later sample (a = 0 past the record, which ends
+    at `end`: `integral_at`); 0 when `t_from` is +inf. The mean over a window starting at
+    `t_from` makes it continuous and differentiable in `t_from`."""
+    integral = integral_at(a, dt, end)
     finite_from = jnp.where(jnp.isfinite(t_from), t_from, 0.0)
     starts = jnp.concatenate([jnp.arange(a.shape[0], dtype=a.dtype) * dt, finite_from[None]])
     means = jnp.abs(integral(starts + window) - integral(starts)) / window
