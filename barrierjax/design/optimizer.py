@@ -34,16 +34,22 @@ inactive have a zero gradient and stop at once; the polish still moves them to t
 boundary, and the next round goes on from there.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
 from jaxtyping import Array
 
 from .formulation import Formulation
 from .model import sizing_formulation, to_design, to_unit
 from .problem import SizingProblem
+
+if TYPE_CHECKING:
+    import optax
 
 
 class _State(eqx.Module):
@@ -101,6 +107,8 @@ def _augmented_lagrangian(
     augmented Lagrangian, then, on the pass that would take the next step, the
     multiplier, penalty and step-size updates and the stopping test, from the
     constraint values that the same gradient evaluation returns."""
+    import optax  # (on first use: see `_solve.phases`)
+
     optimizer = optax.inject_hyperparams(optax.adam)(learning_rate=learning_rate)
     merit = jax.jacfwd(_merit, argnums=1, has_aux=True)
     n_constraints = jax.eval_shape(lambda u: form.measure(form.problem, u)[1], u0).shape[0]
