@@ -34,6 +34,16 @@ class PhaseSolution(eqx.Module):
     dense: diffrax.Solution | None
 
 
+def default_solver(solver=None):
+    """`solver`, or diffrax's Tsit5, the phase models' default (diffrax imported here, on
+    first use)."""
+    if solver is not None:
+        return solver
+    import diffrax
+
+    return diffrax.Tsit5()
+
+
 def solve_phase(
     vector_field,
     y0,

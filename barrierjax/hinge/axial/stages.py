@@ -67,8 +67,8 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ..._custom_types import Scalar
+from ..._solve.phases import default_solver, solve_phase
 from ..._solve.phases import sigma_end as _sigma_end
-from ..._solve.phases import solve_phase
 from ..string import StringStage, StringStart, plastic_string_stage
 
 
@@ -428,10 +428,7 @@ def axial_stages(
     below 1), `string_work` and the string's flow-rule check and, with `n_history`,
     `history`: samples per phase and the state at rest, in the fields of `normal`'s
     histories plus `axial_force`."""
-    if solver is None:
-        import diffrax  # (on first use: see `_solve.phases`)
-
-        solver = diffrax.Tsit5()
+    solver = default_solver(solver)
     root = jnp.sqrt(phi**2 + 3.0)
     p = _Params(mu, phi, eta, 3.0 / (root + phi))
     first, second, string_in_first, locked = _beam_phases(

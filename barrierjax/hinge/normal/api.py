@@ -11,6 +11,7 @@ import jax.numpy as jnp
 from ... import _checks
 from ...compilation_cache import stored_program
 from ..._solve.batching import PADDING_QUANTUM, solve_padded, sorted_chunks
+from ..._solve.phases import default_solver
 from ..._solve.sensitivity import forward_jacobian_jvp
 from .closed_form import quadrature_points, solve_closed_form
 from .ode import solve_ode
@@ -61,15 +62,6 @@ def _normal_impact(mu, phi, speed, rtol, *, method, points, n_history, solver):
     )
     rigid = rigid_barrier(mu, phi, speed, n_history)
     return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
-
-
-def _ode_solver(solver):
-    """`solver`, or diffrax's Tsit5 (diffrax imported on first use: see `_solve.phases`)."""
-    if solver is not None:
-        return solver
-    import diffrax
-
-    return diffrax.Tsit5()
 
 
 def checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history):
@@ -128,7 +120,7 @@ def normal_impact(
         method=method,
         points=quadrature_points(rtol) if method == "closed_form" else None,
         n_history=int(n_history),
-        solver=_ode_solver(solver) if method == "ode" else None,
+        solver=default_solver(solver) if method == "ode" else None,
     )
     rtol = _checks.float_array(rtol, mu.dtype)
     if mu.ndim == 0:
