@@ -89,6 +89,10 @@ class Recording(eqx.Module):
         rows."""
         return Recording(self.buffer, self.count, self.names, lane)
 
+    @property
+    def capacity(self) -> int:
+        return self.buffer.shape[-2]
+
     def _read(self, rows, columns):
         if self.lane is None:
             return self.buffer[rows, columns]

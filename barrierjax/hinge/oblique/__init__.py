@@ -31,7 +31,9 @@ phase would wait, phase by phase, for the batch's slowest member).
 
    f being the friction coefficient. V0 -> 0 at the end, where S' = g_i/V0 is 0/0
    again; the phase is integrated in s, dT/ds = V0, in which every rate is regular, with
-   ln V0 as state; it ends at V0 = V0* rtol e^-3, and the rest is added analytically.
+   ln V0 as state; it ends at V0 = V0* rtol^1/2 e^-3, and the run-out to rest is added
+   in closed form, to second order in that speed (`results.run_out_to_rest`: the
+   deceleration held, the hinges by a Newton step onto g1 = g2 = 0).
 3. Free (only after separation): where g would fall below zero the vehicle leaves; the
    beam moves on alone (g = 0, the central hinge where the load left it) to rest. The
    report keeps contact to the end; this phase is where the model departs from it.

@@ -34,15 +34,14 @@ MEMORY = ("hinge", "rotation", "curvature", "curvature_rate")
 def _interval(recording: Recording, x, first, last):
     """The i in [first, max(last - 1, first)] with hinge[i] <= x < hinge[i + 1], clamped
     to the ends: bisection within the segment's samples, reading one sample per halving."""
-    column = recording.names.index("hinge")
 
     def halve(_, bounds):
         lo, hi = bounds
         mid = (lo + hi) // 2
-        right = recording.buffer[mid, column] <= x
+        right = recording.rows(mid, 1, ("hinge",))["hinge"][0] <= x
         return jnp.where(right, mid, lo), jnp.where(right, hi, mid)
 
-    halvings = max(1, math.ceil(math.log2(recording.buffer.shape[0])))
+    halvings = max(1, math.ceil(math.log2(recording.capacity)))
     lo, _ = jax.lax.fori_loop(0, halvings, halve, (first, jnp.maximum(last, first)))
     return lo
 
@@ -83,7 +82,7 @@ def read_past(y, stage, recording: Recording, previous: Past | None = None) -> P
         below = jnp.sum(previous.hinge <= y.position).astype(previous.start.dtype)
         interval = previous.start + jnp.maximum(below - 1, 0)
         interval = jnp.clip(interval, first, jnp.maximum(last - 1, first))
-    start = jnp.minimum(interval, recording.buffer.shape[0] - _WINDOW)
+    start = jnp.minimum(interval, recording.capacity - _WINDOW)
     window = recording.rows(start, _WINDOW, MEMORY)
     filled = start + jnp.arange(_WINDOW, dtype=start.dtype) <= recorded
     hinge = jnp.where(filled, window.pop("hinge"), jnp.inf)

@@ -17,7 +17,8 @@ from ..._custom_types import Scalar
 from ..._solve.recorded_rk import Recording, Solution
 from ..response import ImpactHistory, ImpactResult, exit_angle_deg
 from .mechanism import Params, State, beam_kinetic_energy, velocity_field
-from .phases import MOTION
+from .memory import read_past
+from .phases import MOTION, Stage, slope_under_load, vector_field
 from .transitions import Outcome, outcome_of
 
 
@@ -64,14 +65,82 @@ class MovingLoad(eqx.Module):
     history: ObliqueImpactHistory
 
 
-def run_out_to_rest(y: State, f: State, in_contact):
-    """Add the motion from V0_end = V0* rtol e^-3 to rest, with the hinges frozen and the
-    deceleration constant (its error is far below rtol): (time, extra displacement under
-    the load)."""
+def _hinges_at_rest(y: State, stage: Stage, past, p: Params):
+    """(S1, S2) at rest, by one Newton step on g1 = g2 = 0 from the solve's last: in the
+    decelerative phases the hinges move as dS_i/ds = g_i - 3/2 c V0 (3.3.16, against s,
+    dT/ds = V0), so that as V0 -> 0 they settle where g_i = 0, at V0 = 0's force, within
+    O(V0_end) of where the solve left them (the error of one step is the square of that)."""
+    still = eqx.tree_at(lambda q: q.speed, y, y.speed - _FAR_BELOW)
+
+    def terms(hinges):
+        f = vector_field(eqx.tree_at(lambda q: (q.s1, q.s2), still, tuple(hinges)), stage, past, p)
+        return jnp.stack([f.s1, f.s2])
+
+    hinges = jnp.stack([y.s1, y.s2])
+    (a, b), (c, d) = jax.jacfwd(terms)(hinges)
+    g1, g2 = terms(hinges)
+    determinant = a * d - b * c
+    return y.s1 - (d * g1 - b * g2) / determinant, y.s2 - (a * g2 - c * g1) / determinant
+
+
+# ln V0 this far below the solve's end stands for V0 = 0 in the hinges' rest (`terms`'
+# V0 e^-60: 1e-26 of it).
+_FAR_BELOW = 60.0
+
+
+def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params) -> State:
+    """The state at rest, from the solve's last, at V0_end = V0* rtol^1/2 e^-3
+    (`transitions.REST_SPEED`): the deceleration held at its last value, V0 falls linearly
+    to zero over tau = V0_end / |V0'|. Every quantity moves at its rate in T at the end
+    (the field over V0_end): those proportional to V0 (the rotation, the backing and hinge
+    work) at half of it, the beam's displacement under the load at V0/2 + theta V_H; the
+    slide, if friction stops it within tau, until it stops, the friction taking the
+    vehicle's tangential energy. Error O(V0_end^2), relative O(rtol e^-6). The exit
+    velocity in contact, theta V_H (`transition`), is read again at rest, theta from the
+    memory at the load's last position; the hinges go to where they rest
+    (`_hinges_at_rest`)."""
+    past = read_past(y, stage, recording)
+    f = vector_field(y, stage, past, p)  # (the solve's last derivative is interpolated)
     v0 = jnp.exp(y.speed)
-    remaining = v0 / jnp.abs(f.speed)
-    sliding = jnp.where(in_contact, y.vehicle_normal, 0.0)  # theta V_H (`transition`)
-    return remaining, (0.5 * v0 + sliding) * remaining
+    tau = v0 / jnp.abs(f.speed)
+    rate = jax.tree.map(lambda r: r / v0, f)  # in T: the phase's variable has dT = V0 of it
+    slowing = rate.vehicle_tangential < 0.0
+    stop = y.vehicle_tangential / jnp.where(slowing, -rate.vehicle_tangential, 1.0)
+    slide = jnp.where(slowing, jnp.minimum(tau, stop), tau)
+    vh = y.vehicle_tangential + rate.vehicle_tangential * slide
+    at_rest = eqx.tree_at(
+        lambda s: (
+            s.time,
+            s.position,
+            s.rotation,
+            s.vehicle_tangential,
+            s.contact_displacement,
+            s.backing_work,
+            s.hinge_work,
+            s.friction_work,
+            s.slope_work,
+        ),
+        y,
+        (
+            y.time + tau,
+            y.position + 0.5 * (y.vehicle_tangential + vh) * slide,
+            y.rotation + 0.5 * rate.rotation * tau,
+            vh,
+            y.contact_displacement + (rate.contact_displacement - 0.5 * v0) * tau,
+            y.backing_work + 0.5 * rate.backing_work * tau,
+            y.hinge_work + 0.5 * rate.hinge_work * tau,
+            y.friction_work
+            + 0.5 * p.mu * (y.vehicle_tangential - vh) * (y.vehicle_tangential + vh),
+            y.slope_work + rate.slope_work * slide,
+        ),
+    )
+    theta = slope_under_load(at_rest, p, read_past(at_rest, stage, recording, past))
+    exit_normal = jnp.where(stage.separated, y.vehicle_normal, theta * vh)
+    return eqx.tree_at(
+        lambda s: (s.vehicle_normal, s.s1, s.s2),
+        at_rest,
+        (exit_normal, *_hinges_at_rest(y, stage, past, p)),
+    )
 
 
 def _motion(samples, k):
@@ -233,14 +302,14 @@ def _speed(normal, tangential):
 
 def finish(solution: Solution, *, n_history, n_x) -> tuple[ObliqueImpact, Outcome]:
     """The results of a solve, and how it ended."""
-    y, f, stage, p = solution.y, solution.derivative, solution.stage, solution.args
-    remaining, extra = run_out_to_rest(y, f, ~stage.separated)
+    y, stage, p = solution.y, solution.stage, solution.args
     recording = solution.recording
+    y = run_out_to_rest(y, stage, recording, p)
     history = None
     if n_history:
         history = build_history(recording.samples, recording.count, p, n_x, n_history)
-    w_final = y.contact_displacement + extra
-    duration = y.time + remaining
+    w_final = y.contact_displacement
+    duration = y.time
     vn, vh = y.vehicle_normal, y.vehicle_tangential
     return ObliqueImpact(
         damage=y.crush,

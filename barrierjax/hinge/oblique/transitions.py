@@ -51,11 +51,16 @@ _OVERTAKEN = 1e-3
 # error estimate would let the step grow without bound: cap it at this many e-folds of V0.
 _EFOLDS_PER_STEP = 2.0
 
+# The decelerative phases end at V0 = V0* rtol^REST_SPEED e^-3, and the run-out to rest is
+# closed in form (`results.run_out_to_rest`, error O(V0^2)).
+REST_SPEED = 0.5
+
 
 def _contact_end(y: State, f: State, stage: Stage, p: Params):
     """The terms positive while the contact lasts: it ends where the force would fall
-    below zero (separation), at V0 = V0* rtol e^-3 (the run-out to rest is analytic,
-    `run_out_to_rest`), or where the load catches up with the hinge ahead (an error)."""
+    below zero (separation), at V0 = V0* rtol^1/2 e^-3 (`REST_SPEED`; the run-out to
+    rest is closed in form, `results.run_out_to_rest`), or where the load catches up with
+    the hinge ahead (an error)."""
     return (
         force_from_rates(y, f) / p.phi,
         y.speed - stage.log_rest,
@@ -121,7 +126,7 @@ def transition(y: State, f: State, stage: Stage, recording: Recording, past: Pas
         first=jnp.zeros_like(left),
         last=breakpoints.left[0],
         breakpoints=breakpoints,
-        log_rest=jnp.log(v0) + jnp.log(p.rtol) - 3.0,
+        log_rest=jnp.log(v0) + REST_SPEED * jnp.log(p.rtol) - 3.0,
         t_star=y.time,
         separated=stage.separated,
         overtaken=stage.overtaken,
