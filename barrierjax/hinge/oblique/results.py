@@ -66,21 +66,25 @@ class MovingLoad(eqx.Module):
 
 
 def _hinges_at_rest(y: State, stage: Stage, past, p: Params):
-    """(S1, S2) at rest, by one Newton step on g1 = g2 = 0 from the solve's last: in the
+    """(S1, S2) at rest, by two Newton steps on g1 = g2 = 0 from the solve's last: in the
     decelerative phases the hinges move as dS_i/ds = g_i - 3/2 c V0 (3.3.16, against s,
-    dT/ds = V0), so that as V0 -> 0 they settle where g_i = 0, at V0 = 0's force, within
-    O(V0_end) of where the solve left them (the error of one step is the square of that)."""
+    dT/ds = V0), so that as V0 -> 0 they settle where g_i = 0, at V0 = 0's force, some
+    V0_end away from where the solve left them (one step left 2e-9 of the free phase's
+    rest, sqrt 3, at rtol 1e-10; two, rounding)."""
     still = eqx.tree_at(lambda q: q.speed, y, y.speed - _FAR_BELOW)
 
     def terms(hinges):
         f = vector_field(eqx.tree_at(lambda q: (q.s1, q.s2), still, tuple(hinges)), stage, past, p)
         return jnp.stack([f.s1, f.s2])
 
-    hinges = jnp.stack([y.s1, y.s2])
-    (a, b), (c, d) = jax.jacfwd(terms)(hinges)
-    g1, g2 = terms(hinges)
-    determinant = a * d - b * c
-    return y.s1 - (d * g1 - b * g2) / determinant, y.s2 - (a * g2 - c * g1) / determinant
+    def newton(hinges):
+        (a, b), (c, d) = jax.jacfwd(terms)(hinges)
+        g1, g2 = terms(hinges)
+        determinant = a * d - b * c
+        return hinges - jnp.stack([d * g1 - b * g2, a * g2 - c * g1]) / determinant
+
+    s1, s2 = newton(newton(jnp.stack([y.s1, y.s2])))
+    return s1, s2
 
 
 # ln V0 this far below the solve's end stands for V0 = 0 in the hinges' rest (`terms`'
