@@ -18,7 +18,7 @@ from ..._solve.recorded_rk import Recording, Solution
 from ..response import ImpactHistory, ImpactResult, exit_angle_deg
 from .mechanism import Params, State, beam_kinetic_energy, velocity_field
 from .memory import read_past
-from .phases import MOTION, Stage, slope_under_load, vector_field
+from .phases import MOTION, Stage, record, slope_under_load, vector_field
 from .transitions import Outcome, outcome_of
 
 
@@ -66,15 +66,14 @@ class MovingLoad(eqx.Module):
 
 
 def _hinges_at_rest(y: State, stage: Stage, past, p: Params):
-    """(S1, S2) at rest, by two Newton steps on g1 = g2 = 0 from the solve's last: in the
-    decelerative phases the hinges move as dS_i/ds = g_i - 3/2 c V0 (3.3.16, against s,
-    dT/ds = V0), so that as V0 -> 0 they settle where g_i = 0, at V0 = 0's force, some
-    V0_end away from where the solve left them (one step left 2e-9 of the free phase's
-    rest, sqrt 3, at rtol 1e-10; two, rounding)."""
-    still = eqx.tree_at(lambda q: q.speed, y, y.speed - _FAR_BELOW)
+    """(S1, S2) at rest, by two Newton steps on g1 = g2 = 0 from where the solve left them
+    (`y`, with V0 = 0): in the decelerative phases the hinges move as dS_i/ds = g_i -
+    3/2 c V0 (3.3.16, against s, dT/ds = V0), so that as V0 -> 0 they settle where g_i =
+    0, at V0 = 0's force, some V0_end away (one step left 2e-9 of the free phase's rest,
+    sqrt 3, at rtol 1e-10; two, rounding)."""
 
     def terms(hinges):
-        f = vector_field(eqx.tree_at(lambda q: (q.s1, q.s2), still, tuple(hinges)), stage, past, p)
+        f = vector_field(eqx.tree_at(lambda q: (q.s1, q.s2), y, tuple(hinges)), stage, past, p)
         return jnp.stack([f.s1, f.s2])
 
     def newton(hinges):
@@ -87,13 +86,14 @@ def _hinges_at_rest(y: State, stage: Stage, past, p: Params):
     return s1, s2
 
 
-# ln V0 this far below the solve's end stands for V0 = 0 in the hinges' rest (`terms`'
-# V0 e^-60: 1e-26 of it).
+# At rest, ln V0 is this far below the solve's end: V0 e^-60, 1e-26 of it, stands for 0
+# (a V0 of 0 itself would put 1/0 into the field's unused branches and their derivatives).
 _FAR_BELOW = 60.0
 
 
-def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params) -> State:
-    """The state at rest, from the solve's last, at V0_end = V0* rtol^1/2 e^-3
+def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params):
+    """The state at rest (V0 = 0, `_FAR_BELOW`) and the memory's window there, from the
+    solve's last state, at V0_end = V0* rtol^1/2 e^-3
     (`transitions.REST_SPEED`): the deceleration held at its last value, V0 falls linearly
     to zero over tau = V0_end / |V0'|. Every quantity moves at its rate in T at the end
     (the field over V0_end): those proportional to V0 (the rotation, the backing and hinge
@@ -114,6 +114,7 @@ def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params) -> 
     vh = y.vehicle_tangential + rate.vehicle_tangential * slide
     at_rest = eqx.tree_at(
         lambda s: (
+            s.speed,
             s.time,
             s.position,
             s.rotation,
@@ -126,6 +127,7 @@ def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params) -> 
         ),
         y,
         (
+            y.speed - _FAR_BELOW,
             y.time + tau,
             y.position + 0.5 * (y.vehicle_tangential + vh) * slide,
             y.rotation + 0.5 * rate.rotation * tau,
@@ -138,13 +140,22 @@ def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params) -> 
             y.slope_work + rate.slope_work * slide,
         ),
     )
-    theta = slope_under_load(at_rest, p, read_past(at_rest, stage, recording, past))
+    past = read_past(at_rest, stage, recording, past)
+    at_rest = eqx.tree_at(lambda s: (s.s1, s.s2), at_rest, _hinges_at_rest(at_rest, stage, past, p))
+    theta = slope_under_load(at_rest, p, past)
     exit_normal = jnp.where(stage.separated, y.vehicle_normal, theta * vh)
-    return eqx.tree_at(
-        lambda s: (s.vehicle_normal, s.s1, s.s2),
-        at_rest,
-        (exit_normal, *_hinges_at_rest(y, stage, past, p)),
-    )
+    return eqx.tree_at(lambda s: s.vehicle_normal, at_rest, exit_normal), past
+
+
+def _ending_at_rest(recording: Recording, y: State, stage: Stage, past, p: Params):
+    """The recorded samples, and after them `y`, the state at rest, as a sample of its
+    own: the histories end where the results are. (The field stands in for its own
+    derivative, which only the hinge's trace reads, and nothing reads it past the end.)"""
+    f = vector_field(y, stage, past, p)
+    sample = record(y, f, f, stage, past, p)
+    count = recording.count
+    samples = {name: v.at[count].set(sample[name]) for name, v in recording.samples.items()}
+    return samples, count + 1
 
 
 def _motion(samples, k):
@@ -308,10 +319,11 @@ def finish(solution: Solution, *, n_history, n_x) -> tuple[ObliqueImpact, Outcom
     """The results of a solve, and how it ended."""
     y, stage, p = solution.y, solution.stage, solution.args
     recording = solution.recording
-    y = run_out_to_rest(y, stage, recording, p)
+    y, past = run_out_to_rest(y, stage, recording, p)
     history = None
     if n_history:
-        history = build_history(recording.samples, recording.count, p, n_x, n_history)
+        samples, count = _ending_at_rest(recording, y, stage, past, p)
+        history = build_history(samples, count, p, n_x, n_history)
     w_final = y.contact_displacement
     duration = y.time
     vn, vh = y.vehicle_normal, y.vehicle_tangential
