@@ -12,7 +12,8 @@ from barrierjax._solve.hermite import quintic_hermite
 from barrierjax.hinge import normal_impact
 from barrierjax.hinge.oblique import moving_load, oblique_impact
 from barrierjax.hinge.oblique.results import displacement_field, vehicle_path
-from barrierjax.hinge.oblique import transitions
+from barrierjax.hinge.oblique import results, transitions
+from barrierjax.hinge.oblique.phases import at_rest
 from barrierjax.hinge.oblique.transitions import initial_carry, step_loop
 
 # Light and moderate vehicles (mu <= 5); see the module's notes on heavy ones.
@@ -438,19 +439,22 @@ def test_batches_across_phi_one_equal_single_runs_and_their_derivatives_match(co
 
 def test_the_closed_run_out_to_rest_gives_what_the_solve_gives_run_on(monkeypatch):
     """The decelerative phases end at V0* rtol^1/2 e^-3 and `run_out_to_rest` closes the
-    rest in form, to second order in that speed; run on to V0* rtol e^-3 instead (the
-    cutoff before it, whose run-out to rest is as closed), the solve gives the same to
-    the integration's own error at rtol 1e-10. A term of the run-out's first order left
-    out (the exit slope read again at rest, the hinges' Newton step onto g1 = g2 = 0, the
-    slide's friction) puts a field 1e-7 off or more. The cases: contact to rest, a light
-    vehicle sliding with friction, friction stopping the slide in contact, a vehicle
-    that separates (the free phase's run-out), and the normal impact."""
+    rest in form, to second order in that speed, the hinges on the cubic of their rest
+    (`phases.at_rest`). Run on to V0* rtol^2 e^-3 instead, with the hinges where the
+    integration leaves them, the solve gives the same to its own error at rtol 1e-10. A
+    term of the run-out's first order left out (the exit slope read again at rest, the
+    hinges' rest, the slide's friction), or the cubic's V_H^2 Psi' term, puts a field
+    1e-7 off or more. The cases: contact to rest, a light vehicle sliding with friction,
+    friction stopping the slide in contact, a vehicle that separates (the free phase's
+    run-out), the normal impact, and a heavy vehicle that comes to rest past S*, where
+    the right hinge has left a curvature Psi' under the load."""
     cases = [
         (5.0, 2.0, 0.4, 0.23, 0.0),
         (0.2, 3.0, 0.5, 0.5, 0.1),
         (0.333, 7.49, 0.3, 0.0816, 0.326),
         (1.0, 10.0, math.sin(math.radians(10.0)), math.cos(math.radians(10.0)), 0.1),
         (1.0, 2.0, 0.7, 0.0, 0.0),
+        (9.8, 1.6, 0.2, 0.7, 0.0),
     ]
     fields = (
         "duration", "barrier_displacement", "max_deflection", "damage", "hinge_position",
@@ -459,12 +463,14 @@ def test_the_closed_run_out_to_rest_gives_what_the_solve_gives_run_on(monkeypatc
     )
 
     def solve():
-        results = [oblique_impact(*c[:4], friction=c[4], rtol=1e-10) for c in cases]
-        return {f: np.array([float(getattr(r, f)) for r in results]) for f in fields}
+        impacts = [oblique_impact(*c[:4], friction=c[4], rtol=1e-10) for c in cases]
+        return {f: np.array([float(getattr(r, f)) for r in impacts]) for f in fields}
 
     closed = solve()
-    monkeypatch.setattr(transitions, "REST_SPEED", 1.0)
-    jax.clear_caches()  # (the constant is read where the program is traced)
+    integrated = lambda y, stage, past, p: (y.s1, y.s2, at_rest(y, stage, past, p)[2])
+    monkeypatch.setattr(transitions, "REST_SPEED", 2.0)
+    monkeypatch.setattr(results, "at_rest", integrated)
+    jax.clear_caches()  # (both are read where the program is traced)
     try:
         run_on = solve()
     finally:

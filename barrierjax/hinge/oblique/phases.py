@@ -143,6 +143,29 @@ def vector_field(y: State, stage: Stage, past: Past, p: Params) -> State:
     )
 
 
+def at_rest(y: State, stage: Stage, past: Past, p: Params):
+    """Where the hinges come to rest from `y` (the run-out's end, V0 = 0), and the slope
+    under the load there: (S1, S2, theta), S1 = S2. In the decelerative phases the hinges
+    move as dS_i/ds = g_i - 3/2 c V0 ((3.3.16) against s, dT/ds = V0), so that they settle
+    where g1 = g2 = 0 at V0 = 0, some V0_end from where the solve left them. There g1 - g2
+    = -(S1 - S2)(1/2 + 2 g / (S1 + S2)) vanishes only where they meet, and g1 = 0 with
+    the contact's force at V0 = 0 ((3.3.22): A = 1 - f theta, B = mu V_H^2 Psi'(F)) is
+    the cubic A S^3 + (3 mu - 2 B) S^2 - 3 A S - 3 mu = 0; in the free phase (g = 0),
+    S = sqrt 3. Newton's method on the cubic from the mean of the two."""
+    free = stage.phase == FREE
+    psi, curvature = slope_memory(past, y.position, p.s_star)
+    theta = jnp.where(free, 0.0, psi - y.rotation)
+    a = 1.0 - _sliding_friction(stage, p) * theta
+    b = p.mu * y.vehicle_tangential**2 * curvature
+    s = 0.5 * (y.s1 + y.s2)
+    for _ in range(3):
+        cubic = ((a * s + 3.0 * p.mu - 2.0 * b) * s - 3.0 * a) * s - 3.0 * p.mu
+        slope = (3.0 * a * s + 2.0 * (3.0 * p.mu - 2.0 * b)) * s - 3.0 * a
+        s = s - cubic / slope
+    s = jnp.where(free, jnp.sqrt(3.0), s)
+    return s, s, theta
+
+
 def trace_sample(phase, v0, f, rate, y, **extra):
     """One recorded step. The trace of the right hinge H = F + S1 carries Psi's data at H:
     Phi, dPhi/dH = Phi'/H' and d2Phi/dH2 = (Phi'' H' - Phi' H'')/H'^3 (primes: d/ds or

@@ -18,7 +18,7 @@ from ..._solve.recorded_rk import Recording, Solution
 from ..response import ImpactHistory, ImpactResult, exit_angle_deg
 from .mechanism import Params, State, beam_kinetic_energy, velocity_field
 from .memory import read_past
-from .phases import MOTION, Stage, record, slope_under_load, vector_field
+from .phases import MOTION, Stage, at_rest, record, vector_field
 from .transitions import Outcome, outcome_of
 
 
@@ -65,54 +65,32 @@ class MovingLoad(eqx.Module):
     history: ObliqueImpactHistory
 
 
-def _hinges_at_rest(y: State, stage: Stage, past, p: Params):
-    """(S1, S2) at rest, by two Newton steps on g1 = g2 = 0 from where the solve left them
-    (`y`, with V0 = 0): in the decelerative phases the hinges move as dS_i/ds = g_i -
-    3/2 c V0 (3.3.16, against s, dT/ds = V0), so that as V0 -> 0 they settle where g_i =
-    0, at V0 = 0's force, some V0_end away (one step left 2e-9 of the free phase's rest,
-    sqrt 3, at rtol 1e-10; two, rounding)."""
-
-    def terms(hinges):
-        f = vector_field(eqx.tree_at(lambda q: (q.s1, q.s2), y, tuple(hinges)), stage, past, p)
-        return jnp.stack([f.s1, f.s2])
-
-    def newton(hinges):
-        (a, b), (c, d) = jax.jacfwd(terms)(hinges)
-        g1, g2 = terms(hinges)
-        determinant = a * d - b * c
-        return hinges - jnp.stack([d * g1 - b * g2, a * g2 - c * g1]) / determinant
-
-    s1, s2 = newton(newton(jnp.stack([y.s1, y.s2])))
-    return s1, s2
-
-
 # At rest, ln V0 is this far below the solve's end: V0 e^-60, 1e-26 of it, stands for 0
 # (a V0 of 0 itself would put 1/0 into the field's unused branches and their derivatives).
 _FAR_BELOW = 60.0
 
 
-def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params):
+def run_out_to_rest(y: State, f: State, stage: Stage, recording: Recording, p: Params):
     """The state at rest (V0 = 0, `_FAR_BELOW`) and the memory's window there, from the
-    solve's last state, at V0_end = V0* rtol^1/2 e^-3
+    solve's last state `y` and its rate `f`, at V0_end = V0* rtol^1/2 e^-3
     (`transitions.REST_SPEED`): the deceleration held at its last value, V0 falls linearly
     to zero over tau = V0_end / |V0'|. Every quantity moves at its rate in T at the end
-    (the field over V0_end): those proportional to V0 (the rotation, the backing and hinge
-    work) at half of it, the beam's displacement under the load at V0/2 + theta V_H; the
-    slide, if friction stops it within tau, until it stops, the friction taking the
-    vehicle's tangential energy. Error O(V0_end^2), relative O(rtol e^-6). The exit
-    velocity in contact, theta V_H (`transition`), is read again at rest, theta from the
-    memory at the load's last position; the hinges go to where they rest
-    (`_hinges_at_rest`)."""
-    past = read_past(y, stage, recording)
-    f = vector_field(y, stage, past, p)  # (the solve's last derivative is interpolated)
+    (f over V0_end): those proportional to V0 (the rotation, the backing and hinge work)
+    at half of it, the beam's displacement under the load at V0/2 + theta V_H; the slide,
+    if friction stops it within tau, until it stops, the friction taking the vehicle's
+    tangential energy. Error O(V0_end^2), relative O(rtol e^-6). The hinges go to where
+    they rest, and the exit velocity in contact, theta V_H (`transition`), is read again
+    there (`phases.at_rest`)."""
     v0 = jnp.exp(y.speed)
     tau = v0 / jnp.abs(f.speed)
     rate = jax.tree.map(lambda r: r / v0, f)  # in T: the phase's variable has dT = V0 of it
-    slowing = rate.vehicle_tangential < 0.0
-    stop = y.vehicle_tangential / jnp.where(slowing, -rate.vehicle_tangential, 1.0)
+    # (Only friction slows the slide; `f`, interpolated, need not hold its zeros exactly.)
+    slowing = stage.sliding & (p.friction > 0.0) & (rate.vehicle_tangential < 0.0)
+    deceleration = jnp.where(slowing, -rate.vehicle_tangential, 0.0)
+    stop = y.vehicle_tangential / jnp.where(slowing, deceleration, 1.0)
     slide = jnp.where(slowing, jnp.minimum(tau, stop), tau)
-    vh = y.vehicle_tangential + rate.vehicle_tangential * slide
-    at_rest = eqx.tree_at(
+    vh = y.vehicle_tangential - deceleration * slide
+    moved = eqx.tree_at(
         lambda s: (
             s.speed,
             s.time,
@@ -140,11 +118,11 @@ def run_out_to_rest(y: State, stage: Stage, recording: Recording, p: Params):
             y.slope_work + rate.slope_work * slide,
         ),
     )
-    past = read_past(at_rest, stage, recording, past)
-    at_rest = eqx.tree_at(lambda s: (s.s1, s.s2), at_rest, _hinges_at_rest(at_rest, stage, past, p))
-    theta = slope_under_load(at_rest, p, past)
+    past = read_past(moved, stage, recording)
+    s1, s2, theta = at_rest(moved, stage, past, p)
     exit_normal = jnp.where(stage.separated, y.vehicle_normal, theta * vh)
-    return eqx.tree_at(lambda s: s.vehicle_normal, at_rest, exit_normal), past
+    rest = eqx.tree_at(lambda s: (s.s1, s.s2, s.vehicle_normal), moved, (s1, s2, exit_normal))
+    return rest, past
 
 
 def _ending_at_rest(recording: Recording, y: State, stage: Stage, past, p: Params):
@@ -317,9 +295,9 @@ def _speed(normal, tangential):
 
 def finish(solution: Solution, *, n_history, n_x) -> tuple[ObliqueImpact, Outcome]:
     """The results of a solve, and how it ended."""
-    y, stage, p = solution.y, solution.stage, solution.args
+    y, f, stage, p = solution.y, solution.derivative, solution.stage, solution.args
     recording = solution.recording
-    y, past = run_out_to_rest(y, stage, recording, p)
+    y, past = run_out_to_rest(y, f, stage, recording, p)
     history = None
     if n_history:
         samples, count = _ending_at_rest(recording, y, stage, past, p)
