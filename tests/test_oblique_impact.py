@@ -10,10 +10,9 @@ import pytest
 
 from barrierjax._solve.hermite import quintic_hermite
 from barrierjax.hinge import normal_impact
-from barrierjax.hinge.oblique import moving_load, oblique_impact
-from barrierjax.hinge.oblique.results import displacement_field, vehicle_path
-from barrierjax.hinge.oblique import results, transitions
+from barrierjax.hinge.oblique import moving_load, oblique_impact, results, transitions
 from barrierjax.hinge.oblique.phases import at_rest
+from barrierjax.hinge.oblique.results import displacement_field, vehicle_path
 from barrierjax.hinge.oblique.transitions import initial_carry, step_loop
 
 # Light and moderate vehicles (mu <= 5); see the module's notes on heavy ones.
