@@ -33,7 +33,7 @@ phase would wait, phase by phase, for the batch's slowest member).
    again; the phase is integrated in s, dT/ds = V0, in which every rate is regular, with
    ln V0 as state; it ends at V0 = V0* rtol^1/2 e^-3, and the run-out to rest is added
    in closed form, to second order in that speed (`results.run_out_to_rest`: the
-   deceleration held, the hinges by a Newton step onto g1 = g2 = 0).
+   deceleration held; the hinges meet at rest, on a cubic, `phases.at_rest`).
 3. Free (only after separation): where g would fall below zero the vehicle leaves; the
    beam moves on alone (g = 0, the central hinge where the load left it) to rest. The
    report keeps contact to the end; this phase is where the model departs from it.
