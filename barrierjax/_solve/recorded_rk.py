@@ -121,7 +121,7 @@ class Recording(eqx.Module):
         a conditional write would read the row back first, a second memory access."""
         row = jnp.stack([jnp.asarray(sample[name], self.buffer.dtype) for name in self.names])
         buffer = self.buffer.at[self.count].set(row)
-        count = jnp.minimum(self.count + jnp.where(when, 1, 0), self.buffer.shape[0] - 1)
+        count = jnp.minimum(self.count + jnp.where(when, 1, 0), self.capacity - 1)
         return Recording(buffer, count, self.names)
 
 

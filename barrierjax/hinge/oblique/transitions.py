@@ -109,8 +109,9 @@ def transition(y: State, f: State, stage: Stage, recording: Recording, past: Pas
     but the load no longer moves, and never reaches that point.)
 
     After the contact: the free phase if the vehicle separated, or the end. The state's
-    `vehicle_normal` then holds the exit velocity: the load point's at separation, (3.3.3)
-    with V0 = 0 (theta V_H) at rest in contact."""
+    `vehicle_normal` then holds the exit velocity: the load point's at separation, (3.3.3);
+    in contact, theta V_H at the solve's end, which `results.run_out_to_rest` reads again
+    at rest."""
     left = recording.count - 1  # this stage's last sample
     if p.moving_load:
         return y, stage, 1.0, jnp.asarray(True)
