@@ -224,7 +224,14 @@ _GRADIENT_ROUNDING = 5e-8
 def _jacobian_against_finite_differences(
     x,
     tolerance,
-    fields=("exit_angle_deg", "exit_tangential_speed", "damage", "barrier_displacement", "duration"),
+    fields=(
+        "exit_angle_deg",
+        "exit_tangential_speed",
+        "damage",
+        "barrier_displacement",
+        "duration",
+        "hinge_position",
+    ),
     inputs=range(5),
 ):
     def outputs(x):
