@@ -21,9 +21,17 @@ first calls take 0.42 to 1.03 times as long (median 0.7) and 0.43 to 0.93 times 
 memory (median 0.6), and most of their programs run as fast or faster
 (benchmarks/README.md, "Twelfth pass"). Not the oblique model's batch: its step, thousands
 of products fused for hundreds of lanes, ran 1.4 times slower, so that program asks for the
-MLIR emitters back (`fusion_emitters`). jaxlib 0.11.2 has dropped the option, and XLA
+MLIR emitters back (`batched_step_options`). jaxlib 0.11.2 has dropped the option, and XLA
 aborts the process on an option it does not know, so it is set only where it was found:
 jaxlib 0.10.1 and 0.10.2.
+
+`xla_cpu_prefer_vector_width=512`, for the oblique model's batch alone
+(`batched_step_options`). XLA's CPU compiler asks LLVM for vectors of 256 bits unless told
+otherwise; on a processor with AVX-512 (this project's 2-core machine, an AMD EPYC), 512
+ran that batch 9 % faster, with the same results to the last bit: 1e4 scenarios at rtol
+1e-6, 26.0 us a scenario against 28.6 (medians of five fresh processes each, in turn;
+benchmarks/README.md, "Seventeenth pass"). Where the processor has no wider vectors, LLVM
+keeps to the widths it has.
 """
 
 import importlib.metadata
@@ -31,6 +39,7 @@ import os
 
 _SCHEDULER = "xla_cpu_enable_concurrency_optimized_scheduler"
 _FUSION_EMITTERS = "xla_cpu_use_fusion_emitters"
+_VECTOR_WIDTH = "xla_cpu_prefer_vector_width"
 
 
 def _jaxlib_minor() -> tuple[int, int] | None:
@@ -49,11 +58,15 @@ def default_flags() -> dict[str, str]:
     return flags
 
 
-def fusion_emitters() -> dict[str, bool]:
-    """`jax.jit`'s `compiler_options` for a program that XLA's MLIR fusion emitters run
-    faster than the LLVM IR ones `set_default_flags` chooses: the MLIR ones, on a jaxlib
-    with the option (none elsewhere), whatever `XLA_FLAGS` says for the other programs."""
-    return {_FUSION_EMITTERS: True} if _FUSION_EMITTERS in default_flags() else {}
+def batched_step_options() -> dict[str, bool | int]:
+    """`jax.jit`'s `compiler_options` for a program that steps many scenarios side by side
+    (the oblique model's batch): vectors of 512 bits, and XLA's MLIR fusion emitters (which
+    run it faster than the LLVM IR ones `set_default_flags` chooses) on a jaxlib with that
+    option, whatever `XLA_FLAGS` says for the other programs."""
+    options: dict[str, bool | int] = {_VECTOR_WIDTH: 512}
+    if _FUSION_EMITTERS in default_flags():
+        options[_FUSION_EMITTERS] = True
+    return options
 
 
 def set_default_flags() -> None:

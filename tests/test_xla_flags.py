@@ -22,9 +22,11 @@ def test_the_fusion_emitters_option_only_on_the_jaxlib_that_has_it(
     flags = _xla_flags.default_flags()
     assert ("xla_cpu_use_fusion_emitters" in flags) == fusion_emitters
     assert flags["xla_cpu_enable_concurrency_optimized_scheduler"] == "false"
-    # A program's own request for the MLIR emitters, only where the option exists.
-    expected = {"xla_cpu_use_fusion_emitters": True} if fusion_emitters else {}
-    assert _xla_flags.fusion_emitters() == expected
+    # The oblique batch's own options: the MLIR emitters only where the option exists.
+    expected = {"xla_cpu_prefer_vector_width": 512}
+    if fusion_emitters:
+        expected["xla_cpu_use_fusion_emitters"] = True
+    assert _xla_flags.batched_step_options() == expected
 
 
 def test_no_jaxlib_metadata_sets_only_the_scheduler(monkeypatch):
