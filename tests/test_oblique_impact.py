@@ -444,9 +444,9 @@ def test_batches_across_phi_one_equal_single_runs_and_their_derivatives_match(co
 
 
 def test_the_closed_run_out_to_rest_gives_what_the_solve_gives_run_on(monkeypatch):
-    """The decelerative phases end at V0* rtol^1/2 e^-3 and `run_out_to_rest` closes the
+    """The decelerative phases end at V0* rtol^1/2 e^-1 and `run_out_to_rest` closes the
     rest in form, to second order in that speed, the hinges on the cubic of their rest
-    (`phases.at_rest`). Run on to V0* rtol^2 e^-3 instead, with the hinges where the
+    (`phases.at_rest`). Run on to V0* rtol^2 e^-1 instead, with the hinges where the
     integration leaves them, the solve gives the same to its own error at rtol 1e-10. A
     term of the run-out's first order left out (the exit slope read again at rest, the
     hinges' rest, the slide's friction), or the cubic's V_H^2 Psi' term, puts a field

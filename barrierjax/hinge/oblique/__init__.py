@@ -31,7 +31,7 @@ phase would wait, phase by phase, for the batch's slowest member).
 
    f being the friction coefficient. V0 -> 0 at the end, where S' = g_i/V0 is 0/0
    again; the phase is integrated in s, dT/ds = V0, in which every rate is regular, with
-   ln V0 as state; it ends at V0 = V0* rtol^1/2 e^-3, and the run-out to rest is added
+   ln V0 as state; it ends at V0 = V0* rtol^1/2 e^-1, and the run-out to rest is added
    in closed form, to second order in that speed (`results.run_out_to_rest`: the
    deceleration held; the hinges meet at rest, on a cubic, `phases.at_rest`).
 3. Free (only after separation): where g would fall below zero the vehicle leaves; the

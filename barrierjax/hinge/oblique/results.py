@@ -72,13 +72,13 @@ _FAR_BELOW = 60.0
 
 def run_out_to_rest(y: State, f: State, stage: Stage, recording: Recording, p: Params):
     """The state at rest (V0 = 0, `_FAR_BELOW`) and the memory's window there, from the
-    solve's last state `y` and its rate `f`, at V0_end = V0* rtol^1/2 e^-3
-    (`transitions.REST_SPEED`): the deceleration held at its last value, V0 falls linearly
-    to zero over tau = V0_end / |V0'|. Every quantity moves at its rate in T at the end
-    (f over V0_end): those proportional to V0 (the rotation, the backing and hinge work)
-    at half of it, the beam's displacement under the load at V0/2 + theta V_H; the slide,
-    if friction stops it within tau, until it stops, the friction taking the vehicle's
-    tangential energy. Error O(V0_end^2), relative O(rtol e^-6). The hinges go to where
+    solve's last state `y` and its rate `f`, at V0_end = V0* rtol^1/2 e^-1
+    (`transitions.REST_SPEED`, `REST_MARGIN`): the deceleration held at its last value, V0
+    falls linearly to zero over tau = V0_end / |V0'|. Every quantity moves at its rate in
+    T at the end (f over V0_end): those proportional to V0 (the rotation, the backing and
+    hinge work) at half of it, the beam's displacement under the load at V0/2 + theta V_H;
+    the slide, if friction stops it within tau, until it stops, the friction taking the
+    vehicle's tangential energy. Error O(V0_end^2), relative O(rtol e^-2). The hinges go to where
     they rest, and the exit velocity in contact, theta V_H (`transition`), is read again
     there (`phases.at_rest`)."""
     v0 = jnp.exp(y.speed)
