@@ -97,11 +97,13 @@ _loaded: dict = {}
 _loading = threading.Lock()
 
 
-def stored_program(jitted):
+def stored_program(jitted, *, compiler_options: dict | None = None):
     """`jitted` (a `jax.jit` or `equinox.filter_jit` function whose static arguments are
     keywords), whose compiled executable is kept on disk and loaded by later processes,
     within `keeping_programs()` and where the positional arguments are pytrees of concrete
-    arrays (equinox modules, None, tuples: every leaf an array)."""
+    arrays (equinox modules, None, tuples: every leaf an array). `compiler_options`: the
+    XLA options `jitted` was made with (`jax.jit`'s): the program kept is then compiled
+    from the function it wraps, with them (XLA refuses options on a jit inside another)."""
 
     @functools.wraps(jitted)
     def call(*args, **static):
@@ -113,11 +115,15 @@ def stored_program(jitted):
         )
         if _programs is None or not concrete:
             return jitted(*args, **static)
-        key = _key(jitted, args, static)
+        key = _key(jitted, args, static, compiler_options)
         if key is None:
             return jitted(*args, **static)
         with _loading:
-            stored = _loaded.get(key) or _load(key) or _compile_and_store(jitted, key, args, static)
+            stored = (
+                _loaded.get(key)
+                or _load(key)
+                or _compile_and_store(jitted, key, args, static, compiler_options)
+            )
             _loaded[key] = stored
         executable, outputs = stored
         return jax.tree.unflatten(outputs, executable(*args))
@@ -125,13 +131,13 @@ def stored_program(jitted):
     return call
 
 
-def _key(jitted, args, static) -> str | None:
+def _key(jitted, args, static, compiler_options) -> str | None:
     """What the program depends on, hashed; None where a static option or the arguments'
     tree has no stable text (an object printed with its address)."""
     import jax
 
     leaves, tree = jax.tree.flatten(args)
-    options = repr((sorted(static.items()), tree))
+    options = repr((sorted(static.items()), tree, sorted((compiler_options or {}).items())))
     if " at 0x" in options:
         return None
     avals = [(a.shape, str(a.dtype), a.weak_type) for a in leaves]
@@ -190,21 +196,23 @@ def _load(key):
         return None
 
 
-def _compile_and_store(jitted, key, args, static):
-    """Compile `jitted` at `args` (its output leaves, under a name of its own) and store the
-    executable; returns (the executable, its output tree)."""
+def _compile_and_store(jitted, key, args, static, compiler_options):
+    """Compile `jitted` at `args` (its output leaves, under a name of its own; with
+    `compiler_options`, the function it wraps) and store the executable; returns (the
+    executable, its output tree)."""
     import jax
     from jax.experimental import serialize_executable
 
     trees = []
+    inner = jitted.__wrapped__ if compiler_options else jitted
 
     def stored(*args):
-        leaves, tree = jax.tree.flatten(jitted(*args, **static))
+        leaves, tree = jax.tree.flatten(inner(*args, **static))
         trees.append(tree)
         return leaves
 
     stored.__name__ = f"stored_{jitted.__name__.strip('_')}"
-    lowered = jax.jit(stored).lower(*args)
+    lowered = jax.jit(stored, compiler_options=compiler_options).lower(*args)
     # An executable that JAX's cache loaded serializes without its code: this program is
     # compiled anew and never written there (its name keeps it apart from `jitted`'s).
     shortest = jax.config.jax_persistent_cache_min_compile_time_secs

@@ -11,8 +11,10 @@ sweep is the same file whenever it runs. Each row of the result holds the varied
 (SI, named by their keys) and every scalar field of the `Result` (SI).
 
 Rows are solved in chunks (at most `chunk` rows, as equal as the count allows; each padded
-to one shape for the solve), sharded across every device (`jax.sharding`: a multi-core or
-multi-GPU host splits each chunk's rows, and so do the hosts of `jax.distributed`, whose
+to one shape for the solve): on one device by `simulate` on the chunk's arrays, as a user's
+call would (the models' own programs, kept on disk by the command line, in parts side by
+side on a CPU); on several, sharded across them (`jax.sharding`: a multi-GPU host splits
+each chunk's rows, and so do the hosts of `jax.distributed`, whose
 process 0 writes the files), each written to its own Parquet
 file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are joined into
 `OUT` (Parquet, or CSV for a `.csv` name) and the folder removed. An interrupted sweep
@@ -30,6 +32,7 @@ from pathlib import Path
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from . import _xla_flags
@@ -126,17 +129,26 @@ def result_columns(result: Result, n: int) -> dict[str, np.ndarray]:
 
 
 def _solver(scene: Scene, varies: list[Vary]) -> Callable:
-    """The batch's solve (`sharded_batch`; `XLA_FLAGS=--xla_force_host_platform_device_count=N`
-    emulates N devices on a CPU)."""
+    """The batch's solve. On one device, `simulate` on the chunk's concrete arrays: the
+    models' own entry points, whose programs the command line keeps on disk
+    (`compilation_cache.stored_program`), run in parts on a CPU and grow a spent step
+    budget. A `jit` around them would hold their run-time checks, host callbacks, and JAX's
+    persistent cache keeps no program with those: every sweep of oblique impacts compiled
+    its chunk again (21 s of the 27-30 s of 10^5 of them, 2026-11-28). On several devices,
+    `sharded_batch` (`XLA_FLAGS=--xla_force_host_platform_device_count=N` emulates N on a
+    CPU)."""
     oblique = any(v.key == "impact.angle" for v in varies) or float(scene.impact.angle_deg) < 90
 
     def solve(values):
         batch = _with_values(scene, varies, values)
         return simulate(batch, n_history=0, oblique=True if oblique else None)
 
-    # The oblique model's batch runs faster with its own XLA options (`_xla_flags`).
-    options = _xla_flags.batched_step_options() if oblique else {}
-    solved = sharded_batch(solve, compiler_options=options or None)
+    if jax.device_count() == 1:
+        solved = lambda values: jax.tree.map(np.asarray, solve(jnp.asarray(values)))
+    else:
+        # The oblique model's batch runs faster with its own XLA options (`_xla_flags`).
+        options = _xla_flags.batched_step_options() if oblique else {}
+        solved = sharded_batch(solve, compiler_options=options or None)
     return lambda values: result_columns(solved(values), len(values))
 
 

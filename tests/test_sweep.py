@@ -46,6 +46,34 @@ def test_an_oblique_sweep_over_angles_equals_single_runs(tmp_path):
     assert (tmp_path / "o.csv").read_text().startswith('"impact.angle"')
 
 
+def test_a_second_oblique_sweep_loads_the_model_it_kept(tmp_path):
+    """Two processes of `barrierjax sweep` over angles on one cache folder: the second loads
+    the oblique model's batch program that the first kept (`stored_program`, with the
+    batch's own XLA options), and writes the same file. A sweep that ran the model inside
+    a `jit` of its own compiled it in every process: its run-time checks are host
+    callbacks, and JAX's persistent cache keeps no program that holds one."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "BARRIERJAX_CACHE_DIR": str(tmp_path / "cache"), "JAX_LOG_COMPILES": "1"}
+
+    def sweep(name):
+        out = tmp_path / f"{name}.parquet"
+        completed = subprocess.run(
+            [sys.executable, "-c", "from barrierjax.cli import command; command()", "sweep",
+             "--vary", "impact.angle=10:40", "--samples", "64", "--out", str(out), "--no-plots"],
+            capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300, check=False,
+        )  # fmt: skip
+        assert completed.returncode == 0, completed.stderr[-2000:]
+        return completed.stderr, out
+
+    (first, first_out), (second, second_out) = sweep("first"), sweep("second")
+    assert "jit(stored_solved)" in first and "jit(stored_solved)" not in second
+    assert "jit(solve)" not in first + second  # the sweep's own program of old
+    _assert_same_rows(second_out, first_out)
+
+
 def test_an_interrupted_sweep_resumed_gives_the_same_file(normal_sweep, tmp_path):
     sweep, out = normal_sweep
     finished = []

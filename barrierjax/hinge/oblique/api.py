@@ -264,8 +264,10 @@ def _solved(mu, phi, vn, vh, friction, rtol, count, *, max_steps, n_history, n_x
 # A batch's step runs faster with 512-bit vectors and XLA's MLIR fusion emitters
 # (`_xla_flags`).
 _oblique_solved = stored_program(jax.jit(_solved, static_argnames=_STATIC))
+_BATCH_OPTIONS = _xla_flags.batched_step_options()
 _oblique_batch_solved = stored_program(
-    jax.jit(_solved, static_argnames=_STATIC, compiler_options=_xla_flags.batched_step_options())
+    jax.jit(_solved, static_argnames=_STATIC, compiler_options=_BATCH_OPTIONS),
+    compiler_options=_BATCH_OPTIONS,
 )
 
 
