@@ -229,7 +229,15 @@ def _compile_and_store(jitted, key, args, static, compiler_options):
         with tempfile.NamedTemporaryFile(dir=_programs, delete=False) as file:
             pickle.dump((payload, numbered(in_tree), numbered(outputs)), file)
         os.replace(file.name, _programs / key)  # whole, or not at all
-    except (OSError, pickle.PicklingError, ValueError, TypeError, RuntimeError) as error:
-        # Not storable (host callbacks, a full disk): only slower.
+    except (
+        OSError,
+        pickle.PicklingError,
+        AttributeError,
+        ValueError,
+        TypeError,
+        RuntimeError,
+    ) as error:
+        # Not storable (a full disk; host callbacks, e.g. `equinox.error_if`, which the
+        # pickler meets as a local function: AttributeError): only slower.
         warnings.warn(f"not kept in {_programs} ({error})", stacklevel=3)
     return executable, outputs

@@ -140,6 +140,23 @@ def test_models_under_a_stored_program_give_what_jit_gives(monkeypatch, tmp_path
             np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
+def test_a_program_with_a_host_callback_runs_unkept_with_a_warning(monkeypatch, tmp_path):
+    # `equinox.error_if` is a host callback on a CPU: such a program cannot be serialized
+    # (the pickler fails on a local function); it runs, its check raises, nothing is kept.
+    import equinox as eqx
+
+    monkeypatch.setenv("BARRIERJAX_CACHE_DIR", str(tmp_path / "cache"))
+    checked = compilation_cache.stored_program(
+        jax.jit(lambda x: eqx.error_if(2.0 * x, x < 0.0, "x must be non-negative"))
+    )
+    with compilation_cache.keeping_programs() as folder:
+        with pytest.warns(UserWarning, match="not kept in"):
+            assert float(checked(jnp.asarray(1.5))) == 3.0
+        with pytest.raises(Exception, match="x must be non-negative"):
+            jax.block_until_ready(checked(jnp.asarray(-1.0)))
+    assert not folder.exists() or not any(folder.iterdir())
+
+
 def test_nothing_is_kept_where_the_cache_is_off(monkeypatch):
     monkeypatch.setenv("BARRIERJAX_CACHE_DIR", "off")
     with compilation_cache.keeping_programs() as folder:
