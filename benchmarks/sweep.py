@@ -7,7 +7,8 @@ model's own vmapped call.
 1000-2500 kg), wall time of the whole command in a fresh process (start-up, compilation,
 chunks, the Parquet file; no plot), twice (the second with the compilation cache warm);
 (2) the same number of scenarios as one `barrierjax.simulate` call on arrays after
-compilation (what a user writes by hand with vmap); (3) the same for 10^5 oblique impacts
+compilation (what a user writes by hand; not inside a `jit` of the caller's, where a batch
+is solved whole and the oblique model's about 2.7 times slower); (3) the same for 10^5 oblique impacts
 (angle 10-40 degrees); (4) the sweep's first call in a fresh process and its peak memory
 (one chunk of 65,536); (5) 10^3 barrier-system impacts of `examples/mash_3_11.toml`
 (speed 90-110 km/h, angle 20-30 degrees, post spacing 1.7-2.1 m; chunks of 64) through the
@@ -95,7 +96,7 @@ def system_main(args):
 
 
 def direct(kind, n) -> float:
-    """One `simulate` call on arrays of n scenarios, after compiling it (the best of 2)."""
+    """One `simulate` call on arrays of n scenarios, after its first (the best of 2)."""
     import jax
 
     jax.config.update("jax_enable_x64", True)
@@ -116,7 +117,7 @@ def direct(kind, n) -> float:
         angle = rng.uniform(10, 40, n)
         scene = Scene(s.barrier, s.vehicle, Impact(s.impact.speed, jnp.asarray(angle)))
         options = {"oblique": True}
-    run = jax.jit(lambda sc: simulate(sc, n_history=0, **options))  # every field, as the sweep
+    run = lambda sc: simulate(sc, n_history=0, **options)  # every field, as the sweep
     jax.block_until_ready(run(scene))
     times = []
     for _ in range(2):
