@@ -144,7 +144,7 @@ def _solver(scene: Scene, varies: list[Vary]) -> Callable:
         return simulate(batch, n_history=0, oblique=True if oblique else None)
 
     if jax.device_count() == 1:
-        solved = lambda values: jax.tree.map(np.asarray, solve(jnp.asarray(values)))
+        solved = lambda values: solve(jnp.asarray(values))  # (result_columns: to NumPy)
     else:
         # The oblique model's batch runs faster with its own XLA options (`_xla_flags`).
         options = _xla_flags.batched_step_options() if oblique else {}
