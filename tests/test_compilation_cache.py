@@ -1,6 +1,7 @@
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import jax
@@ -138,6 +139,29 @@ def test_models_under_a_stored_program_give_what_jit_gives(monkeypatch, tmp_path
         assert jax.tree.structure(result) == jax.tree.structure(plain_result)
         for a, b in zip(jax.tree.leaves(result), jax.tree.leaves(plain_result)):
             np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+@pytest.mark.parametrize("model", ["normal ODE", "axial"])
+def test_the_solved_models_are_kept_and_a_new_tolerance_runs_the_same_program(
+    monkeypatch, tmp_path, model
+):
+    # Their failed solves are outputs raised outside the program (`_solve.phases`): a
+    # run-time check inside it, a host callback, would keep it out of both caches.
+    from barrierjax.hinge import axial_impact, normal_impact
+
+    monkeypatch.setenv("BARRIERJAX_CACHE_DIR", str(tmp_path / "cache"))
+    solve = {
+        "normal ODE": lambda rtol: normal_impact(1.0, 2.0, 0.7, method="ode", rtol=rtol),
+        "axial": lambda rtol: axial_impact(0.5, 2.0, 1.0, 0.5, rtol=rtol),
+    }[model]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with compilation_cache.keeping_programs() as folder:
+            loose, tight = solve(1e-4), solve(1e-10)
+    assert not [w for w in caught if "not kept" in str(w.message)]
+    (kept,) = folder.iterdir()
+    assert kept.name.startswith("normal_impact-" if model == "normal ODE" else "axial_impact-")
+    assert float(loose.duration) != float(tight.duration)
 
 
 def test_a_program_with_a_host_callback_runs_unkept_with_a_warning(monkeypatch, tmp_path):

@@ -5,6 +5,11 @@ where that function crosses zero, located by a Newton root find on the solver's 
 interpolant so that the switching time carries an exact gradient (a boolean event would
 give a zero one).
 
+A failed solve is an output (`PhaseSolution.failure`), raised outside the compiled program
+(`raise_failures`), not a run-time check inside it: a check is a host callback, and neither
+JAX's persistent cache nor `compilation_cache.stored_program` can keep a program holding
+one (each process would compile the model again).
+
 diffrax and optimistix are imported where a phase is solved (traced), not with the module:
 a process that only loads compiled programs never needs them (`barrierjax` imports them on
 first use, about 0.3 s of a second run of the command line).
@@ -12,25 +17,38 @@ first use, about 0.3 s of a second run of the command line).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Bool, Float, Int, PyTree
 
 if TYPE_CHECKING:
     import diffrax
 
 
+# `PhaseSolution.failure`: how a solve failed, if it did.
+SOLVED, STEPS_SPENT, SOLVER_FAILED, NOT_SWITCHED = range(4)
+_FAILURES = {
+    STEPS_SPENT: "spent its step budget",
+    SOLVER_FAILED: "failed in the ODE solver (a step size fell to nothing, or the state "
+    "became non-finite)",
+    NOT_SWITCHED: "ended at its time bound without reaching its switching condition",
+}
+
+
 class PhaseSolution(eqx.Module):
-    """The end of one phase, its number of accepted and rejected steps and, if requested,
-    its dense interpolant."""
+    """The end of one phase, its number of accepted and rejected steps, how it failed
+    (`SOLVED` if it did not) and, if requested, its dense interpolant."""
 
     t_end: Float[Array, ""]
     y_end: PyTree[Float[Array, ""]]
     num_steps: Int[Array, ""]
     switched: Bool[Array, ""]
+    failure: Int[Array, ""]
     dense: diffrax.Solution | None
 
 
@@ -62,10 +80,9 @@ def solve_phase(
     """Integrate `vector_field(t, y, args)` from `t0` until `switch(t, y, args)` crosses
     zero, or to `t_bound` when there is no switch.
 
-    With a switch, `t_bound` must lie beyond it; reaching it without switching is an
-    error (raised at run time with `equinox.error_if`), never a silent truncation, unless
-    `switch_required` is False: the phase then ends at the first of the two, and
-    `switched` says which.
+    With a switch, `t_bound` must lie beyond it; reaching it without switching is a
+    failure (`NOT_SWITCHED`), never a silent truncation, unless `switch_required` is
+    False: the phase then ends at the first of the two, and `switched` says which.
     """
     import diffrax
     import optimistix as optx
@@ -94,23 +111,48 @@ def solve_phase(
         # Models differentiate their solves in forward mode (`sensitivity.py`); a plain
         # while loop then serves both the forward pass and the JVP.
         adjoint=diffrax.ForwardMode(),
-        throw=True,
+        throw=False,
     )
-    t_end = solution.ts[-1]
     switched = jnp.asarray(False) if switch is None else solution.event_mask
-    if switch is not None and switch_required:
-        t_end = eqx.error_if(
-            t_end,
-            ~solution.event_mask,
-            "phase ended at its time bound without reaching its switching condition",
-        )
+    failure = jnp.where(
+        diffrax.is_okay(solution.result),
+        jnp.where(switch_required & (switch is not None) & ~switched, NOT_SWITCHED, SOLVED),
+        jnp.where(solution.result == diffrax.RESULTS.max_steps_reached, STEPS_SPENT, SOLVER_FAILED),
+    ).astype(jnp.int32)
     return PhaseSolution(
-        t_end=t_end,
+        t_end=solution.ts[-1],
         y_end=jax.tree.map(lambda y: y[-1], solution.ys),
         num_steps=solution.stats["num_steps"],
         switched=switched,
+        failure=failure,
         dense=solution if dense else None,
     )
+
+
+def raise_failures(name: str, result, failures, phases: Sequence[str]):
+    """`result`, or an error naming the first phase of the first scenario whose solve
+    failed. `failures`: the phases' `PhaseSolution.failure` codes along the last axis, the
+    scenarios' shape before it; `phases` names them. Concrete failures raise a
+    `RuntimeError` here; traced ones (inside a caller's `jit`, `vmap` or `grad`) a
+    run-time error where the program runs (`equinox.branched_error_if`)."""
+    kinds = len(_FAILURES)
+    messages = [f"{name}: {phase} {_FAILURES[code]}" for phase in phases for code in _FAILURES]
+    if isinstance(failures, jax.core.Tracer):
+        flat = jnp.reshape(failures, (-1, len(phases))).astype(jnp.int32)
+        codes = jnp.arange(len(phases), dtype=jnp.int32) * kinds + flat - 1
+        codes = jnp.where(flat != SOLVED, codes, len(messages))
+        first = jnp.min(codes)
+        failed = first < len(messages)
+        # (Under `vmap` the message is the largest index's of all members: 0 where none.)
+        return eqx.branched_error_if(result, failed, jnp.where(failed, first, 0), messages)
+    flat = np.asarray(failures).reshape(-1, len(phases))
+    failed = np.flatnonzero((flat != SOLVED).any(axis=1))
+    if failed.size == 0:
+        return result
+    scenario = failed[0]
+    phase = np.flatnonzero(flat[scenario])[0]
+    where = f" (scenario {scenario} of {len(flat)})" if np.ndim(failures) > 1 else ""
+    raise RuntimeError(messages[phase * kinds + flat[scenario, phase] - 1] + where)
 
 
 def sigma_end(rtol):

@@ -257,10 +257,10 @@ def run_command(args) -> int:
         with progress_after("compiling and solving the impact model (report 3.2/3.3)..."):
             result = simulate(scene)
             jax.block_until_ready(result)
-    except jax.errors.JaxRuntimeError as error:  # a model's run-time check (equinox.error_if)
-        raise CommandError(model_error(error), EXIT_FAILED) from None
     except (NotImplementedError, ValueError) as error:
         raise _scene_error(error) from None
+    except RuntimeError as error:  # a failed solve, or a run-time check (equinox.error_if)
+        raise CommandError(model_error(error), EXIT_FAILED) from None
     data = result_dict(scene, result, name)
     data["occupant_risk"] = occupant_risk_dict(result)
     bad = [k for k, v in data.items() if isinstance(v, float) and not math.isfinite(v)]

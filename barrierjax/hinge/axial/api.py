@@ -4,22 +4,25 @@ into the `NormalImpact` of report 3.2."""
 
 import functools
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 
 from ... import _checks
 from ..._solve.batching import solve_padded, sorted_chunks
+from ..._solve.phases import SOLVED, raise_failures
 from ..._solve.sensitivity import forward_jacobian_jvp
+from ...compilation_cache import stored_program
 from ..normal.api import checked_inputs, normal_impact
 from ..normal.results import NormalImpact, normal_result, rigid_barrier, scaled_history
-from .stages import axial_stages
+from .stages import PHASES, axial_stages
 
 
+@stored_program
 @functools.partial(jax.jit, static_argnames=("n_history", "string_cells", "string_courant"))
 def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string_courant):
-    """The beam stage by time integration, then the plastic string where N reaches N0; in
-    the speed-free variables the speed enters through eta0 V^2. `rtol` is traced: a new
+    """(the result, the failure codes of `stages.PHASES`): the beam stage by time
+    integration, then the plastic string where N reaches N0; in the speed-free variables
+    the speed enters through eta0 V^2. `rtol` is traced: a new
     tolerance does not recompile. A flat array of scenarios is solved inside this `jit`,
     in sorted vmapped chunks (`_CHUNK`), and their derivatives taken as problems of their
     own (`forward_jacobian_jvp`): a `vmap` around it, or over the derivatives' directions,
@@ -43,19 +46,15 @@ def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string
 
 
 def _finish(r, mu, phi, speed, yields, safe_phi, *, n_history, string_cells):
-    """The `NormalImpact` of the speed-free stages `r`, in the report's units."""
+    """The `NormalImpact` of the speed-free stages `r`, in the report's units, and the
+    stages' failure codes."""
     t_string = r["t_string"] * speed
     history = None
     if n_history:
         history = scaled_history(r["history"], mu, speed, r["s_final"], t_string)
-    duration = eqx.error_if(
-        r["t_final"] * speed,
-        ~r["string_finished"] & yields,
-        "the plastic string stage did not come to rest within its step budget",
-    )
     result = normal_result(
         damage=r["damage"] * speed**2,
-        duration=duration,
+        duration=r["t_final"] * speed,
         displacement=r["w_final"] * speed**2,
         hinge=r["s_final"],
         crush_work=safe_phi * r["damage"] * speed**2,
@@ -70,7 +69,8 @@ def _finish(r, mu, phi, speed, yields, safe_phi, *, n_history, string_cells):
         history=history,
     )
     rigid = rigid_barrier(mu, phi, speed, n_history, string_cells=string_cells)
-    return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+    result = jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+    return result, jnp.where(yields, r["failure"], SOLVED)
 
 
 def axial_impact(
@@ -103,7 +103,8 @@ def axial_impact(
     string's profile. Scalars, or arrays of one shape (in sorted vmapped chunks of 64,
     padded with copies to the next power of two or whole chunk, so that batches of nearby
     sizes share one compiled program; on a CPU, 2,048 scenarios or more in parts run side
-    by side, one a core); `rtol` is traced, so a new tolerance does not recompile.
+    by side, one a core); `rtol` is traced, so a new tolerance does not recompile. A
+    failed solve raises as in `normal_impact`, naming the stage.
     """
     if isinstance(axial_ratio, int | float) and axial_ratio == 0:
         return normal_impact(mass_ratio, force_ratio, speed, rtol=rtol, n_history=n_history)
@@ -114,16 +115,18 @@ def axial_impact(
     if not 0.0 < string_courant <= 1.0:
         raise ValueError(f"string_courant must be in (0, 1]; got {string_courant!r}")
     args = jnp.broadcast_arrays(mu, phi, speed, eta0)
-    solve = functools.partial(
-        _axial_impact,
-        rtol=jnp.asarray(rtol, args[0].dtype),
+    rtol = jnp.asarray(rtol, args[0].dtype)
+    options = dict(
         n_history=int(n_history),
         string_cells=int(string_cells),
         string_courant=float(string_courant),
     )
     if args[0].ndim == 0:
-        return solve(*args)
-    return solve_padded(lambda *x: solve(*x[:-1]), args, _CHUNK)
+        result, failures = _axial_impact(*args, rtol, **options)
+    else:
+        solve = lambda *x: _axial_impact(*x[:-1], rtol, **options)
+        result, failures = solve_padded(solve, args, _CHUNK)
+    return raise_failures("axial_impact", result, failures, PHASES)
 
 
 # The batch is padded (`padded_size`) to the next power of two up to a chunk, then to whole

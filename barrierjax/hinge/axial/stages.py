@@ -67,7 +67,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ..._custom_types import Scalar
-from ..._solve.phases import default_solver, solve_phase
+from ..._solve.phases import SOLVED, STEPS_SPENT, default_solver, solve_phase
 from ..._solve.phases import sigma_end as _sigma_end
 from ..string import StringStage, StringStart, plastic_string_stage
 
@@ -411,6 +411,10 @@ def _after_string(first, second, string_in_first, string: StringStage, start: St
     }
 
 
+# The solves of `axial_stages`, as `_solve.phases.raise_failures` names them.
+PHASES = ("the crushing phase", "the decelerative phase", "the plastic string stage")
+
+
 def axial_stages(
     mu,
     phi,
@@ -425,7 +429,8 @@ def axial_stages(
 ) -> dict:
     """Both stages, speed-free (see the module docstring); `eta` = eta0 V^2. Returns the
     end-of-crushing state, the state at rest, the works, `t_string` (inf where n stays
-    below 1), `string_work` and the string's flow-rule check and, with `n_history`,
+    below 1), `string_work`, the string's flow-rule check, `failure` (the solves' codes,
+    `PHASES`, as `_solve.phases.PhaseSolution` has them) and, with `n_history`,
     `history`: samples per phase and the state at rest, in the fields of `normal`'s
     histories plus `axial_force`."""
     solver = default_solver(solver)
@@ -467,7 +472,10 @@ def axial_stages(
         t_string=jnp.where(reached, t_string, jnp.inf),
         string_work=jnp.where(reached, string.stretching_work, 0.0),
         string_steps=string.num_steps,
-        string_finished=string.finished,
+        failure=jnp.stack(  # `PHASES`
+            [first.failure, second.failure, jnp.where(string.finished, SOLVED, STEPS_SPENT)],
+            axis=-1,
+        ),
         **final,
     )
 

@@ -9,12 +9,12 @@ import jax
 import jax.numpy as jnp
 
 from ... import _checks
-from ...compilation_cache import stored_program
 from ..._solve.batching import PADDING_QUANTUM, solve_padded, sorted_chunks
-from ..._solve.phases import default_solver
+from ..._solve.phases import SOLVED, default_solver, raise_failures
 from ..._solve.sensitivity import forward_jacobian_jvp
+from ...compilation_cache import stored_program
 from .closed_form import quadrature_points, solve_closed_form
-from .ode import solve_ode
+from .ode import PHASES, solve_ode
 from .results import NormalImpact, finish_history, normal_result, rigid_barrier
 
 if TYPE_CHECKING:
@@ -27,20 +27,23 @@ _STATIC = ("method", "points", "n_history", "solver")
 @stored_program
 @functools.partial(jax.jit, static_argnames=_STATIC)
 def _normal_impact(mu, phi, speed, rtol, *, method, points, n_history, solver):
-    """`rtol` is traced: the ODE at a new tolerance does not recompile. The closed form
-    depends on it only through its number of quadrature nodes, `points` (None for the
-    ODE)."""
+    """(the result, the ODE's phases' failure codes: `ode.PHASES`, none for the closed
+    form). `rtol` is traced: the ODE at a new tolerance does not recompile. The closed
+    form depends on it only through its number of quadrature nodes, `points` (None for
+    the ODE)."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)  # keeps the unused branch finite for gradients
     if method == "closed_form":
         acc, final, raw = solve_closed_form(mu, safe_phi, points=points, n_history=n_history)
         damage = 0.5 * acc.t_star
+        failure = jnp.full(mu.shape + (len(PHASES),), SOLVED, jnp.int32)
     else:
         ode = lambda mu, phi, rtol: solve_ode(
             mu, phi, rtol=rtol, n_history=n_history, solver=solver
         )
         acc, final, raw = forward_jacobian_jvp(ode, n_differentiable=2)(mu, safe_phi, rtol)
         damage = final.pop("damage")
+        failure = final.pop("failure")
     history = None
     if n_history:
         history = finish_history(raw, mu, safe_phi, speed, acc, damage, final["s_final"])
@@ -61,7 +64,8 @@ def _normal_impact(mu, phi, speed, rtol, *, method, points, n_history, solver):
         history=history,
     )
     rigid = rigid_barrier(mu, phi, speed, n_history)
-    return jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+    result = jax.tree.map(lambda a, b: jnp.where(yields, a, b), result, rigid)
+    return result, jnp.where(yields[..., None], failure, SOLVED)
 
 
 def checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history):
@@ -109,7 +113,9 @@ def normal_impact(
     way to run a large sweep; padded with copies to the next power of two, or above 256
     to the next multiple of 256, so that sweeps of nearby sizes share one compiled
     program; on a CPU, 2,048 scenarios or more in parts run side by side, one a core);
-    `jax.vmap` and `jax.grad` work with respect to any argument.
+    `jax.vmap` and `jax.grad` work with respect to any argument. A failed ODE solve (a
+    spent step budget, say) raises a `RuntimeError` naming the phase and the scenario;
+    inside a caller's `jit`, `vmap` or `grad`, an error where the program runs.
     """
     if method not in ("closed_form", "ode"):
         raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
@@ -124,9 +130,11 @@ def normal_impact(
     )
     rtol = _checks.float_array(rtol, mu.dtype)
     if mu.ndim == 0:
-        return _normal_impact(mu, phi, speed, rtol, **options)
-    chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, rtol, **options)
-    return solve_padded(chunked, (mu, phi, speed), PADDING_QUANTUM)
+        result, failures = _normal_impact(mu, phi, speed, rtol, **options)
+    else:
+        chunked = lambda mu, phi, speed, _: _normal_impact_chunked(mu, phi, speed, rtol, **options)
+        result, failures = solve_padded(chunked, (mu, phi, speed), PADDING_QUANTUM)
+    return raise_failures("normal_impact", result, failures, PHASES)
 
 
 # Array inputs are solved in vmapped chunks of this many scenarios: a chunk's working set

@@ -104,6 +104,10 @@ def _complete_at_rest(dec, sigma_end, y: _RunOutState):
     )
 
 
+# The solves of `solve_ode`, as `_solve.phases.raise_failures` names them.
+PHASES = ("the accelerative phase", "the decelerative phase")
+
+
 def ode_phases(mu, phi, *, rtol, solver, dense=False):
     """The two diffrax solves, in the speed-free variables; also used by the benchmark for
     step counts."""
@@ -153,6 +157,7 @@ def solve_ode(mu, phi, *, rtol, n_history, solver):
     )
     final = _complete_at_rest(dec, _sigma_end(rtol), second.y_end)
     final["damage"] = first.y_end.crush
+    final["failure"] = jnp.stack([first.failure, second.failure], axis=-1)  # `PHASES`
     history = None
     if n_history:
         history = _ode_history(first, second, dec, final, n_history, _sigma_end(rtol), time_unit)
