@@ -17,6 +17,7 @@ first use, about 0.3 s of a second run of the command line).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -76,6 +77,7 @@ def solve_phase(
     dense: bool = False,
     max_steps: int = 4096,
     switch_required: bool = True,
+    bisect: bool = False,
 ) -> PhaseSolution:
     """Integrate `vector_field(t, y, args)` from `t0` until `switch(t, y, args)` crosses
     zero, or to `t_bound` when there is no switch.
@@ -83,6 +85,12 @@ def solve_phase(
     With a switch, `t_bound` must lie beyond it; reaching it without switching is a
     failure (`NOT_SWITCHED`), never a silent truncation, unless `switch_required` is
     False: the phase then ends at the first of the two, and `switched` says which.
+
+    The switch falls through zero. It is located by Newton's method from the end of the
+    step that crosses it, or with `bisect` by bisection on that step: for a switch with
+    kinks (the least of several functions) or one that dips through zero where it is
+    nearly flat, where Newton's iterations can cycle within the step without converging
+    (`SOLVER_FAILED`).
     """
     import diffrax
     import optimistix as optx
@@ -94,7 +102,7 @@ def solve_phase(
         root_tol = jnp.maximum(1e-2 * rtol, 1e-13)
         event = diffrax.Event(
             lambda t, y, args, **kwargs: switch(t, y, args),
-            root_finder=optx.Newton(rtol=root_tol, atol=root_tol),
+            root_finder=_bisection() if bisect else optx.Newton(rtol=root_tol, atol=root_tol),
         )
     solution = diffrax.diffeqsolve(
         diffrax.ODETerm(vector_field),
@@ -127,6 +135,23 @@ def solve_phase(
         failure=failure,
         dense=solution if dense else None,
     )
+
+
+@functools.cache
+def _bisection():
+    """optimistix's bisection on a switch that falls through zero, to a bracket of a few
+    units in the last place: Newton's method converges to rounding, and a bracket as wide
+    as its tolerance would leave the answer batched and alone that far apart (its own test
+    also asks |switch| < atol, which rounding may never grant so near). Its sign is given
+    (`flip`): "detect" would be a run-time check, a host callback."""
+    import optimistix as optx
+
+    class Bisection(optx.Bisection):
+        def terminate(self, fn, y, args, options, state, tags):
+            width = jnp.abs(state.upper - state.lower)
+            return width <= self.atol + self.rtol * jnp.abs(y), optx.RESULTS.successful
+
+    return Bisection(rtol=1e-15, atol=1e-15, flip=True)
 
 
 def raise_failures(name: str, result, failures, phases: Sequence[str]):
