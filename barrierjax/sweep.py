@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import _xla_flags
+from ._solve.phases import SolveError
 from .scene import Scene
 from .scene_file import FIELDS, Field, SceneFileError, parse_quantity
 from .sharding import sharded_batch
@@ -225,7 +226,10 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
                 progress(len(rows))
             continue
         padded = np.concatenate([rows, np.repeat(rows[-1:], shape - len(rows), 0)])
-        columns = solve(padded)
+        try:
+            columns = solve(padded)
+        except SolveError as error:
+            raise _failed_row(error, sweep.varies, rows, index * size, parts) from None
         if lead:
             table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
             table |= {name: column[: len(rows)] for name, column in columns.items()}
@@ -247,6 +251,20 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
     os.replace(partial, out)
     shutil.rmtree(parts)
     return {name: joined.column(name).to_numpy() for name in joined.column_names}
+
+
+def _failed_row(error: SolveError, varies: list[Vary], rows, start: int, parts: Path):
+    """`error` of a chunk's solve, naming the sweep's row that failed and its values (a
+    padding copy that failed is its chunk's last row)."""
+    if error.scenario is None:
+        where, row = f"rows {start}-{start + len(rows) - 1}", None
+    else:
+        k = min(error.scenario, len(rows) - 1)
+        values = ", ".join(f"{v.key}={x:.6g}" for v, x in zip(varies, rows[k], strict=True))
+        where, row = f"row {start + k} ({values})", start + k
+    return SolveError(
+        f"{where}: {error}; the finished chunks are in {parts}: --resume carries on", row
+    )
 
 
 def _agreed(flags: list[bool]) -> list[bool]:

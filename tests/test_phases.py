@@ -14,6 +14,7 @@ from barrierjax._solve.phases import (
     raise_failures,
     solve_phase,
 )
+from barrierjax.hinge import SolveError
 
 PHASES = ("the first phase", "the second phase")
 
@@ -50,17 +51,19 @@ def test_concrete_failures_raise_naming_the_phase_and_the_scenario():
     assert raise_failures("model", result, np.zeros((3, 2), np.int32), PHASES) is result
     failures = np.array([[SOLVED, SOLVED], [SOLVED, STEPS_SPENT], [NOT_SWITCHED, SOLVED]])
     with pytest.raises(
-        RuntimeError,
+        SolveError,
         match=r"^model: the second phase spent its step budget "
         r"\(scenario 1 of 3\)$",
-    ):
+    ) as raised:
         raise_failures("model", result, failures, PHASES)
+    assert raised.value.scenario == 1
     with pytest.raises(
         RuntimeError,
         match=r"the first phase ended at its time bound without "
         r"reaching its switching condition$",
-    ):
+    ) as raised:
         raise_failures("model", result, np.array([NOT_SWITCHED, SOLVED]), PHASES)
+    assert raised.value.scenario is None
 
 
 def test_traced_failures_raise_where_the_program_runs():

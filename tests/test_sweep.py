@@ -129,6 +129,35 @@ def test_bad_sweeps_exit_2_with_one_line_and_write_nothing(capsys, tmp_path, arg
     assert not out.exists() and not parts_folder(out).exists()
 
 
+def test_a_scenario_the_model_cannot_solve_exits_1_naming_its_row(capsys, tmp_path, monkeypatch):
+    # The model's own error names the scenario within the chunk; the sweep names the row,
+    # its values and where the finished chunks are.
+    from barrierjax import sweep as sweep_module
+    from barrierjax.hinge import SolveError
+
+    calls = []
+
+    def second_chunk_fails(batch, **options):
+        calls.append(batch)
+        if len(calls) == 2:
+            raise SolveError("model: the phase spent its step budget (scenario 1 of 3)", 1)
+        return simulate(batch, **options)
+
+    monkeypatch.setattr(sweep_module, "simulate", second_chunk_fails)
+    out = tmp_path / "rows.parquet"
+    args = ["--vary", "impact.speed=20:60", "--samples", "6", "--seed", "3", "--chunk", "3"]
+    assert main(["sweep", *args, "--out", str(out), "--no-plots"]) == 1
+    speed = draw(_varies("impact.speed=20:60"), 6, 3)[4, 0]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == (
+        f"error: row 4 (impact.speed={speed:.6g}): model: the phase spent its step budget "
+        f"(scenario 1 of 3); the finished chunks are in {parts_folder(out)}: --resume "
+        "carries on"
+    )
+    assert [p.name for p in parts_folder(out).glob("part-*")] == ["part-00000.parquet"]
+    assert not out.exists()
+
+
 def test_an_unwritable_output_is_refused_in_one_line(capsys, tmp_path):
     blocked = tmp_path / "file"
     blocked.write_text("")

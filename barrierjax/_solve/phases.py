@@ -41,6 +41,16 @@ _FAILURES = {
 }
 
 
+class SolveError(RuntimeError):
+    """A model's solve that failed, in one line naming the model, the phase and what to
+    do; `scenario`: in a batch, the flat index of the first scenario that failed (None for
+    a single one)."""
+
+    def __init__(self, message: str, scenario: int | None = None):
+        super().__init__(message)
+        self.scenario = scenario
+
+
 class PhaseSolution(eqx.Module):
     """The end of one phase, its number of accepted and rejected steps, how it failed
     (`SOLVED` if it did not) and, if requested, its dense interpolant."""
@@ -158,7 +168,7 @@ def raise_failures(name: str, result, failures, phases: Sequence[str]):
     """`result`, or an error naming the first phase of the first scenario whose solve
     failed. `failures`: the phases' `PhaseSolution.failure` codes along the last axis, the
     scenarios' shape before it; `phases` names them. Concrete failures raise a
-    `RuntimeError` here; traced ones (inside a caller's `jit`, `vmap` or `grad`) a
+    `SolveError` here; traced ones (inside a caller's `jit`, `vmap` or `grad`) a
     run-time error where the program runs (`equinox.branched_error_if`)."""
     kinds = len(_FAILURES)
     messages = [f"{name}: {phase} {_FAILURES[code]}" for phase in phases for code in _FAILURES]
@@ -174,10 +184,12 @@ def raise_failures(name: str, result, failures, phases: Sequence[str]):
     failed = np.flatnonzero((flat != SOLVED).any(axis=1))
     if failed.size == 0:
         return result
-    scenario = failed[0]
+    scenario = int(failed[0])
     phase = np.flatnonzero(flat[scenario])[0]
-    where = f" (scenario {scenario} of {len(flat)})" if np.ndim(failures) > 1 else ""
-    raise RuntimeError(messages[phase * kinds + flat[scenario, phase] - 1] + where)
+    message = messages[phase * kinds + flat[scenario, phase] - 1]
+    if np.ndim(failures) == 1:
+        raise SolveError(message)
+    raise SolveError(f"{message} (scenario {scenario} of {len(flat)})", scenario)
 
 
 def sigma_end(rtol):

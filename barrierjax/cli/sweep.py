@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .output import EXIT_OK, EXIT_USAGE, CommandError, progress
+from .output import EXIT_FAILED, EXIT_OK, EXIT_USAGE, CommandError, progress
 
 __all__ = ["format_sweep_summary", "sweep_command"]
 
@@ -80,6 +80,7 @@ def sweep_command(args) -> int:
     from tqdm import tqdm
 
     from .. import scene_file
+    from ..hinge import SolveError
     from ..sweep import Sweep, SweepError, parse_vary, parts_folder, run_sweep
 
     lead = _distributed(args)
@@ -106,6 +107,8 @@ def sweep_command(args) -> int:
         seconds = time.perf_counter() - start
     except SweepError as error:
         raise CommandError(str(error), EXIT_USAGE) from None
+    except SolveError as error:  # a scenario the model could not solve
+        raise CommandError(str(error), EXIT_FAILED) from None
     except KeyboardInterrupt:
         raise CommandError(
             f"interrupted: the finished chunks are in {parts_folder(args.out)}; "

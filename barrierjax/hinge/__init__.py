@@ -1,5 +1,9 @@
-"""Rigid-plastic hinge mechanisms of a vehicle striking a beam on a backing (report ch. 3)."""
+"""Rigid-plastic hinge mechanisms of a vehicle striking a beam on a backing (report ch. 3).
 
+A solve that fails (a spent step budget, say) raises a `SolveError` (a `RuntimeError`)
+naming the model, the phase and, in a batch, the scenario (`SolveError.scenario`)."""
+
+from .._solve.phases import SolveError
 from .axial import axial_impact
 from .elastic import (
     ElasticImpact,
@@ -24,6 +28,7 @@ __all__ = [
     "NormalImpactHistory",
     "ObliqueImpact",
     "ObliqueImpactHistory",
+    "SolveError",
     "StaticLoadDeflection",
     "StringImpact",
     "delay_integral",

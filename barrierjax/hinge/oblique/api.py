@@ -11,6 +11,7 @@ from jax.core import Tracer
 
 from ... import _checks, _xla_flags
 from ..._solve.batching import PADDING_QUANTUM, solve_padded
+from ..._solve.phases import SolveError
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
 from ..._solve.sensitivity import forward_jacobian, forward_jacobian_jvp
@@ -18,6 +19,7 @@ from ...compilation_cache import stored_program
 from .results import MovingLoad, ObliqueImpact, build_history, finish, rigid_barrier
 from .transitions import (
     OVERTAKEN_MESSAGE,
+    Outcome,
     initial_carry,
     outcome_of,
     phase_name,
@@ -81,8 +83,9 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
         result, outcome = solve(budget)
         if isinstance(outcome.complete, Tracer):
             return raise_failures(result, outcome, moving_load)
-        if np.asarray(outcome.overtaken).any():
-            raise RuntimeError(f"{name}: {OVERTAKEN_MESSAGE}")
+        overtaken = np.flatnonzero(np.asarray(outcome.overtaken).ravel())
+        if overtaken.size:
+            raise _failure(f"{name}: {OVERTAKEN_MESSAGE}", outcome, int(overtaken[0]))
         spent = ~np.asarray(outcome.complete).ravel()
         if not spent.any():
             return result
@@ -90,13 +93,22 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
         if max_steps is None and suggestion <= _LARGEST_BUDGET:
             budget = suggestion
             continue
-        first = np.flatnonzero(spent)[0]
+        first = int(np.flatnonzero(spent)[0])
         phase = phase_name(int(np.asarray(outcome.phase).ravel()[first]), moving_load)
         time = float(np.asarray(outcome.time).ravel()[first])
-        raise RuntimeError(
+        raise _failure(
             f"{name}: the step budget max_steps={budget} was spent in {phase} at T = "
-            f"{time:.4g}: pass max_steps={suggestion} or more"
+            f"{time:.4g}: pass max_steps={suggestion} or more",
+            outcome,
+            first,
         )
+
+
+def _failure(message: str, outcome: Outcome, k: int) -> SolveError:
+    """`message` as a `SolveError`; in a batch, naming its scenario `k`."""
+    if np.ndim(outcome.complete) == 0:
+        return SolveError(message)
+    return SolveError(f"{message} (scenario {k} of {np.size(outcome.complete)})", k)
 
 
 def _power_of_two_above(steps: float) -> int:
@@ -135,7 +147,7 @@ def oblique_impact(
       start of each phase and segment (also the size of the recorded history). `None`:
       1024, and where that is spent (heavy vehicles, mu above about 50), four times as
       many, again and again up to 65536 (each a new compilation). A spent budget raises a
-      one-line `RuntimeError` that says what to pass; inside a caller's `jit`, `vmap` or
+      one-line `SolveError` (a `RuntimeError`) that says what to pass; inside a caller's `jit`, `vmap` or
       `grad` the budget cannot grow and a spent one is a run-time error.
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
