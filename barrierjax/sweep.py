@@ -155,13 +155,16 @@ def _solver(scene: Scene, varies: list[Vary]) -> Callable:
 
 @dataclass(frozen=True)
 class Sweep:
-    """A sweep: what it varies, how many scenarios and how drawn, in chunks of `chunk`."""
+    """A sweep: what it varies, how many scenarios and how drawn, in chunks of `chunk`;
+    with `skip_failures`, a scenario the model cannot solve is a row of nulls with its
+    error in the column `failure` (else it ends the sweep)."""
 
     varies: list[Vary]
     samples: int
     seed: int
     distribution: str = "uniform"
     chunk: int = 65536
+    skip_failures: bool = False
 
     def manifest(self, scene) -> dict:
         if isinstance(scene, Scene):
@@ -175,7 +178,7 @@ class Sweep:
             digest.update(np.asarray(x, np.float64).tobytes())
         return {"vary": [[v.key, v.low, v.high] for v in self.varies], "samples": self.samples,
                 "seed": self.seed, "distribution": self.distribution, "chunk": self.chunk,
-                "scene": digest.hexdigest()}  # fmt: skip
+                "skip_failures": self.skip_failures, "scene": digest.hexdigest()}  # fmt: skip
 
 
 def parts_folder(out: Path) -> Path:
@@ -227,12 +230,16 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
             continue
         padded = np.concatenate([rows, np.repeat(rows[-1:], shape - len(rows), 0)])
         try:
-            columns = solve(padded)
+            columns, failed = _solved(solve, padded, len(rows), sweep.skip_failures)
         except SolveError as error:
             raise _failed_row(error, sweep.varies, rows, index * size, parts) from None
         if lead:
+            mask = np.isin(np.arange(len(rows)), list(failed))
             table = {v.key: rows[:, i] for i, v in enumerate(sweep.varies)}
-            table |= {name: column[: len(rows)] for name, column in columns.items()}
+            table |= {name: pa.array(column[: len(rows)], mask=mask if failed else None)
+                      for name, column in columns.items()}  # fmt: skip
+            if sweep.skip_failures:
+                table["failure"] = pa.array([failed.get(k, "") for k in range(len(rows))])
             partial = path.with_suffix(".partial")
             pq.write_table(pa.table(table), partial)
             os.replace(partial, path)  # a chunk is there whole, or not at all
@@ -250,7 +257,29 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
         pq.write_table(joined, partial)
     os.replace(partial, out)
     shutil.rmtree(parts)
-    return {name: joined.column(name).to_numpy() for name in joined.column_names}
+    return {name: joined.column(name).to_numpy(zero_copy_only=False)
+            for name in joined.column_names}  # fmt: skip
+
+
+def _solved(solve, rows, n: int, skip_failures: bool):
+    """(`solve(rows)`, {row: error} of the first `n` rows that it could not solve). With
+    `skip_failures`, each row whose solve fails (`SolveError`) is replaced by one that
+    solved, whose results stand in for it, and the chunk solved again; else the error
+    stands."""
+    failed: dict[int, str] = {}
+    while True:
+        try:
+            return solve(rows), failed
+        except SolveError as error:
+            if not skip_failures or error.scenario is None:
+                raise
+            k = min(error.scenario, n - 1)  # (a padding copy that failed: the last row)
+            standing_in = [i for i in range(n) if i != k and i not in failed]
+            if k in failed or not standing_in:
+                raise
+            failed[k] = str(error)
+            rows = rows.copy()
+            rows[k if k < n - 1 else slice(n - 1, None)] = rows[standing_in[0]]
 
 
 def _failed_row(error: SolveError, varies: list[Vary], rows, start: int, parts: Path):
@@ -291,7 +320,8 @@ def _prepare(parts: Path, out: Path, manifest: dict, resume: bool):
             raise SweepError(f"{parts}: no readable manifest.json; remove the folder") from None
         if previous != manifest:
             raise SweepError(f"{parts} holds a different sweep (another scene, keys, ranges, "
-                             f"samples, seed, distribution or chunk): remove it or match it")  # fmt: skip
+                             f"samples, seed, distribution, chunk or --skip-failures): remove "
+                             f"it or match it")  # fmt: skip
         return
     try:
         out.parent.mkdir(parents=True, exist_ok=True)

@@ -158,6 +158,36 @@ def test_a_scenario_the_model_cannot_solve_exits_1_naming_its_row(capsys, tmp_pa
     assert not out.exists()
 
 
+def test_skipped_failures_are_rows_of_nulls_and_the_rest_are_solved(capsys, tmp_path, monkeypatch):
+    # One scenario "fails" wherever it is in a chunk: it is replaced, the chunk solved again,
+    # and its row holds nulls and the error; every other row is the sweep's without it.
+    from barrierjax import sweep as sweep_module
+    from barrierjax.hinge import SolveError
+
+    varies = _varies("impact.speed=20:60")
+    bad = draw(varies, 6, 3)[4, 0]
+
+    def failing_at_the_bad_speed(batch, **options):
+        at = np.flatnonzero(np.asarray(batch.impact.speed) == bad)
+        if at.size:
+            raise SolveError(f"model: it failed (scenario {at[0]} of 3)", int(at[0]))
+        return simulate(batch, **options)
+
+    args = ["--vary", "impact.speed=20:60", "--samples", "6", "--seed", "3", "--chunk", "3"]
+    plain = tmp_path / "plain.parquet"
+    assert main(["sweep", *args, "--out", str(plain), "--no-plots"]) == 0
+    monkeypatch.setattr(sweep_module, "simulate", failing_at_the_bad_speed)
+    out = tmp_path / "rows.parquet"
+    assert main(["sweep", *args, "--out", str(out), "--no-plots", "--skip-failures"]) == 0
+    assert "1 could not be solved" in capsys.readouterr().out
+    rows, expected = pq.read_table(out).to_pydict(), pq.read_table(plain).to_pydict()
+    assert rows.pop("failure") == ["", "", "", "", "model: it failed (scenario 1 of 3)", ""]
+    assert rows["impact.speed"] == expected["impact.speed"]
+    assert rows["damage"][4] is None and rows["duration"][4] is None
+    for name, values in rows.items():
+        assert values[:4] + values[5:] == expected[name][:4] + expected[name][5:], name
+
+
 def test_an_unwritable_output_is_refused_in_one_line(capsys, tmp_path):
     blocked = tmp_path / "file"
     blocked.write_text("")

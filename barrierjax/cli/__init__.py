@@ -278,6 +278,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="carry on an interrupted sweep (its chunks in FILE.parts/)")  # fmt: skip
     sweep.add_argument("--chunk", type=int, default=65536, metavar="N",
                        help="scenarios solved at once (default 65536)")  # fmt: skip
+    sweep.add_argument("--skip-failures", action="store_true",
+                       help="a scenario the model cannot solve becomes a row of nulls with "
+                       "its error in the column failure (default: it ends the sweep)")  # fmt: skip
     sweep.add_argument("--no-plots", action="store_true", help="do not write the plot")
     sweep.add_argument("--coordinator", metavar="HOST:PORT",
                        help="run as one of --processes processes (jax.distributed): the "

@@ -11,17 +11,25 @@ __all__ = ["format_sweep_summary", "sweep_command"]
 
 
 def format_sweep_summary(columns: dict, out: Path, seconds: float) -> str:
-    """Each column's least, mean and largest value, and where the rows went."""
+    """Each column's least, mean and largest value over the solved rows, where the rows
+    went, and the rows skipped (`--skip-failures`: their `failure` is not empty)."""
     import numpy as np
 
+    columns = dict(columns)
+    failures = columns.pop("failure", None)
     n = len(next(iter(columns.values())))
     width = max(len(name) for name in columns)
-    lines = [f"{n} scenarios in {seconds:.1f} s ({n / seconds:,.0f} per second) -> {out}", "",
-             f"{'column'.ljust(width)}  {'least':>12}  {'mean':>12}  {'largest':>12}"]  # fmt: skip
+    lines = [f"{n} scenarios in {seconds:.1f} s ({n / seconds:,.0f} per second) -> {out}"]
+    failed = [] if failures is None else np.flatnonzero([bool(f) for f in failures])
+    if len(failed):
+        lines.append(f"{len(failed)} could not be solved (their results are null, their "
+                     f"error in the column failure); the first, row {failed[0]}: "
+                     f"{failures[failed[0]]}")  # fmt: skip
+    lines += ["", f"{'column'.ljust(width)}  {'least':>12}  {'mean':>12}  {'largest':>12}"]
     for name, values in columns.items():
         values = np.asarray(values, float)
-        lines.append(f"{name.ljust(width)}  {values.min():12.5g}  {values.mean():12.5g}  "
-                     f"{values.max():12.5g}")  # fmt: skip
+        lines.append(f"{name.ljust(width)}  {np.nanmin(values):12.5g}  "
+                     f"{np.nanmean(values):12.5g}  {np.nanmax(values):12.5g}")  # fmt: skip
     return "\n".join(lines)
 
 
@@ -33,9 +41,10 @@ def _plot(columns: dict, inputs: list[str], path: Path):
     import matplotlib.pyplot as plt
     import numpy as np
 
+    varies = lambda name: name in columns and np.nanmax(columns[name]) > np.nanmin(columns[name])
     outputs = [name for name in ("damage", "max_deflection", "duration", "exit_angle_deg",
                                  "dynamic_deflection", "working_width", "exit_angle", "oiv_y")
-               if name in columns and np.ptp(columns[name]) > 0]  # fmt: skip
+               if varies(name)]  # fmt: skip
     n = len(columns[inputs[0]])
     rows = np.random.default_rng(0).choice(n, min(n, 20000), replace=False)
     fig, axes = plt.subplots(len(outputs), len(inputs), squeeze=False,
@@ -99,7 +108,8 @@ def sweep_command(args) -> int:
             scene = scene_file.parse_scene(data)
     try:
         varies = [parse_vary(text, fields) for text in args.vary or ()]
-        sweep = Sweep(varies, args.samples, args.seed, args.distribution, args.chunk)
+        sweep = Sweep(varies, args.samples, args.seed, args.distribution, args.chunk,
+                      args.skip_failures)  # fmt: skip
         start = time.perf_counter()
         with tqdm(total=args.samples, unit="scenario", unit_scale=True, file=None,
                   desc="sweep", leave=False, disable=not lead) as bar:  # fmt: skip

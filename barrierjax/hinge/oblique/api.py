@@ -147,8 +147,8 @@ def oblique_impact(
       start of each phase and segment (also the size of the recorded history). `None`:
       1024, and where that is spent (heavy vehicles, mu above about 50), four times as
       many, again and again up to 65536 (each a new compilation). A spent budget raises a
-      one-line `SolveError` (a `RuntimeError`) that says what to pass; inside a caller's `jit`, `vmap` or
-      `grad` the budget cannot grow and a spent one is a run-time error.
+      one-line `SolveError` (a `RuntimeError`) that says what to pass; inside a caller's
+      `jit`, `vmap` or `grad` the budget cannot grow and a spent one is a run-time error.
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap` (padded
