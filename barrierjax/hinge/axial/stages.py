@@ -65,9 +65,10 @@ it: at rtol 1e-6 that vehicle crushes on to the string (t_star 16 % late, the st
 1.5 % and the damage 6e-4 off); at the default 1e-8 the steps resolve it.
 
 Not solved: a vehicle that barely yields the barrier (phi below about 1.06) whose beam the
-axial force stops while it crushes (the locked case above). As V0 falls to zero, V0 S'
-stays finite, S' grows without bound and the step size falls to nothing before V0 = 0,
-where the phase would end: the solve spends its step budget (`SolveError`). Of 32,768
+axial force stops while it crushes (the locked case above). As V0 falls to zero the hinge's
+equation, V0 S' = ..., is stiff in proportion to 1/V0, and the explicit steps shrink to
+nothing before V0 = 0, where the phase would end: the solve spends its step budget
+(`SolveError`). Of 32,768
 random scenarios (log-uniform mu 0.05-100, phi 1.01-20, eta0 0.01-20; V uniform 0.05-3)
 at rtol 1e-8, 217 failed so, all with phi below 1.06; of the first 400 with phi below
 1.06, 129 still fail with 16 times the budget. The cure would be the decelerative phase's:
