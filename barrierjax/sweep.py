@@ -263,23 +263,23 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
 
 def _solved(solve, rows, n: int, skip_failures: bool):
     """(`solve(rows)`, {row: error} of the first `n` rows that it could not solve). With
-    `skip_failures`, each row whose solve fails (`SolveError`) is replaced by one that
-    solved, whose results stand in for it, and the chunk solved again; else the error
-    stands."""
+    `skip_failures`, the rows whose solve failed (`SolveError.failures`) are replaced by
+    one that solved, whose results stand in for them, and the chunk solved again; else the
+    error stands. (A padding copy that failed is its chunk's last row.)"""
     failed: dict[int, str] = {}
     while True:
         try:
             return solve(rows), failed
         except SolveError as error:
-            if not skip_failures or error.scenario is None:
+            new = {min(k, n - 1): reason for k, reason in error.failures.items()}
+            standing_in = [i for i in range(n) if i not in failed and i not in new]
+            if not skip_failures or not new or set(new) & set(failed) or not standing_in:
                 raise
-            k = min(error.scenario, n - 1)  # (a padding copy that failed: the last row)
-            standing_in = [i for i in range(n) if i != k and i not in failed]
-            if k in failed or not standing_in:
-                raise
-            failed[k] = str(error)
+            failed |= new
             rows = rows.copy()
-            rows[k if k < n - 1 else slice(n - 1, None)] = rows[standing_in[0]]
+            rows[list(new)] = rows[standing_in[0]]
+            if n - 1 in new:
+                rows[n:] = rows[standing_in[0]]
 
 
 def _failed_row(error: SolveError, varies: list[Vary], rows, start: int, parts: Path):

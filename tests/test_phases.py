@@ -57,6 +57,11 @@ def test_concrete_failures_raise_naming_the_phase_and_the_scenario():
     ) as raised:
         raise_failures("model", result, failures, PHASES)
     assert raised.value.scenario == 1
+    assert raised.value.failures == {
+        1: "model: the second phase spent its step budget",
+        2: "model: the first phase ended at its time bound without reaching its switching "
+        "condition",
+    }
     with pytest.raises(
         RuntimeError,
         match=r"the first phase ended at its time bound without "

@@ -140,7 +140,10 @@ def test_a_scenario_the_model_cannot_solve_exits_1_naming_its_row(capsys, tmp_pa
     def second_chunk_fails(batch, **options):
         calls.append(batch)
         if len(calls) == 2:
-            raise SolveError("model: the phase spent its step budget (scenario 1 of 3)", 1)
+            raise SolveError(
+                "model: the phase spent its step budget (scenario 1 of 3)",
+                {1: "model: the phase spent its step budget"},
+            )
         return simulate(batch, **options)
 
     monkeypatch.setattr(sweep_module, "simulate", second_chunk_fails)
@@ -170,7 +173,7 @@ def test_skipped_failures_are_rows_of_nulls_and_the_rest_are_solved(capsys, tmp_
     def failing_at_the_bad_speed(batch, **options):
         at = np.flatnonzero(np.asarray(batch.impact.speed) == bad)
         if at.size:
-            raise SolveError(f"model: it failed (scenario {at[0]} of 3)", int(at[0]))
+            raise SolveError(f"model: it failed (scenario {at[0]} of 3)", {int(at[0]): "it failed"})
         return simulate(batch, **options)
 
     args = ["--vary", "impact.speed=20:60", "--samples", "6", "--seed", "3", "--chunk", "3"]
@@ -181,7 +184,7 @@ def test_skipped_failures_are_rows_of_nulls_and_the_rest_are_solved(capsys, tmp_
     assert main(["sweep", *args, "--out", str(out), "--no-plots", "--skip-failures"]) == 0
     assert "1 could not be solved" in capsys.readouterr().out
     rows, expected = pq.read_table(out).to_pydict(), pq.read_table(plain).to_pydict()
-    assert rows.pop("failure") == ["", "", "", "", "model: it failed (scenario 1 of 3)", ""]
+    assert rows.pop("failure") == ["", "", "", "", "it failed", ""]
     assert rows["impact.speed"] == expected["impact.speed"]
     assert rows["damage"][4] is None and rows["duration"][4] is None
     for name, values in rows.items():

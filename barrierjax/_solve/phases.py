@@ -42,13 +42,17 @@ _FAILURES = {
 
 
 class SolveError(RuntimeError):
-    """A model's solve that failed, in one line naming the model, the phase and what to
-    do; `scenario`: in a batch, the flat index of the first scenario that failed (None for
-    a single one)."""
+    """A model's solve that failed: its first failure in one line (the model, the phase,
+    what to do) and, in a batch, `failures`, each failed scenario's reason by its flat
+    index; `scenario`, the first of them (None for a single solve)."""
 
-    def __init__(self, message: str, scenario: int | None = None):
+    def __init__(self, message: str, failures: dict[int, str] | None = None):
         super().__init__(message)
-        self.scenario = scenario
+        self.failures = failures or {}
+
+    @property
+    def scenario(self) -> int | None:
+        return min(self.failures) if self.failures else None
 
 
 class PhaseSolution(eqx.Module):
@@ -184,12 +188,12 @@ def raise_failures(name: str, result, failures, phases: Sequence[str]):
     failed = np.flatnonzero((flat != SOLVED).any(axis=1))
     if failed.size == 0:
         return result
-    scenario = int(failed[0])
-    phase = np.flatnonzero(flat[scenario])[0]
-    message = messages[phase * kinds + flat[scenario, phase] - 1]
+    phase = lambda k: np.flatnonzero(flat[k])[0]
+    reasons = {int(k): messages[phase(k) * kinds + flat[k, phase(k)] - 1] for k in failed}
     if np.ndim(failures) == 1:
-        raise SolveError(message)
-    raise SolveError(f"{message} (scenario {scenario} of {len(flat)})", scenario)
+        raise SolveError(reasons[0])
+    first = int(failed[0])
+    raise SolveError(f"{reasons[first]} (scenario {first} of {len(flat)})", reasons)
 
 
 def sigma_end(rtol):

@@ -85,7 +85,7 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
             return raise_failures(result, outcome, moving_load)
         overtaken = np.flatnonzero(np.asarray(outcome.overtaken).ravel())
         if overtaken.size:
-            raise _failure(f"{name}: {OVERTAKEN_MESSAGE}", outcome, int(overtaken[0]))
+            raise _failure({int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in overtaken}, outcome)
         spent = ~np.asarray(outcome.complete).ravel()
         if not spent.any():
             return result
@@ -93,22 +93,24 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
         if max_steps is None and suggestion <= _LARGEST_BUDGET:
             budget = suggestion
             continue
-        first = int(np.flatnonzero(spent)[0])
-        phase = phase_name(int(np.asarray(outcome.phase).ravel()[first]), moving_load)
-        time = float(np.asarray(outcome.time).ravel()[first])
-        raise _failure(
-            f"{name}: the step budget max_steps={budget} was spent in {phase} at T = "
-            f"{time:.4g}: pass max_steps={suggestion} or more",
-            outcome,
-            first,
-        )
+        phases, times = np.asarray(outcome.phase).ravel(), np.asarray(outcome.time).ravel()
+        reasons = {
+            int(k): f"{name}: the step budget max_steps={budget} was spent in "
+            f"{phase_name(int(phases[k]), moving_load)} at T = {times[k]:.4g}: "
+            f"pass max_steps={suggestion} or more"
+            for k in np.flatnonzero(spent)
+        }
+        raise _failure(reasons, outcome)
 
 
-def _failure(message: str, outcome: Outcome, k: int) -> SolveError:
-    """`message` as a `SolveError`; in a batch, naming its scenario `k`."""
+def _failure(reasons: dict[int, str], outcome: Outcome) -> SolveError:
+    """The `SolveError` of the scenarios that failed, by flat index: the first's reason,
+    naming it in a batch."""
+    first = min(reasons)
     if np.ndim(outcome.complete) == 0:
-        return SolveError(message)
-    return SolveError(f"{message} (scenario {k} of {np.size(outcome.complete)})", k)
+        return SolveError(reasons[first])
+    size = np.size(outcome.complete)
+    return SolveError(f"{reasons[first]} (scenario {first} of {size})", reasons)
 
 
 def _power_of_two_above(steps: float) -> int:
