@@ -265,13 +265,13 @@ def _solved(solve, rows, n: int, skip_failures: bool):
     """(`solve(rows)`, {row: error} of the first `n` rows that it could not solve). With
     `skip_failures`, the rows whose solve failed (`SolveError.failures`) are replaced by
     one that solved, whose results stand in for them, and the chunk solved again; else the
-    error stands. (A padding copy that failed is its chunk's last row.)"""
+    error stands."""
     failed: dict[int, str] = {}
     while True:
         try:
             return solve(rows), failed
         except SolveError as error:
-            new = {min(k, n - 1): reason for k, reason in error.failures.items()}
+            new = _failed_rows(error, n)
             standing_in = [i for i in range(n) if i not in failed and i not in new]
             if not skip_failures or not new or set(new) & set(failed) or not standing_in:
                 raise
@@ -282,17 +282,26 @@ def _solved(solve, rows, n: int, skip_failures: bool):
                 rows[n:] = rows[standing_in[0]]
 
 
+def _failed_rows(error: SolveError, n: int) -> dict[int, str]:
+    """`error.failures` by row of a chunk of `n` rows padded with copies of its last: a
+    copy that failed is that row."""
+    rows: dict[int, str] = {}
+    for k, reason in sorted(error.failures.items()):
+        rows.setdefault(min(k, n - 1), reason)
+    return rows
+
+
 def _failed_row(error: SolveError, varies: list[Vary], rows, start: int, parts: Path):
-    """`error` of a chunk's solve, naming the sweep's row that failed and its values (a
-    padding copy that failed is its chunk's last row)."""
-    if error.scenario is None:
-        where, row = f"rows {start}-{start + len(rows) - 1}", None
-    else:
-        k = min(error.scenario, len(rows) - 1)
+    """`error` of a chunk's solve, naming the sweep's first row that failed and its
+    values; its `failures` by the sweep's rows."""
+    failures = {start + k: reason for k, reason in _failed_rows(error, len(rows)).items()}
+    where = f"rows {start}-{start + len(rows) - 1}"
+    if failures:
+        k = min(failures) - start
         values = ", ".join(f"{v.key}={x:.6g}" for v, x in zip(varies, rows[k], strict=True))
-        where, row = f"row {start + k} ({values})", start + k
+        where = f"row {start + k} ({values})"
     return SolveError(
-        f"{where}: {error}; the finished chunks are in {parts}: --resume carries on", row
+        f"{where}: {error}; the finished chunks are in {parts}: --resume carries on", failures
     )
 
 

@@ -139,7 +139,7 @@ def test_a_scenario_the_model_cannot_solve_exits_1_naming_its_row(capsys, tmp_pa
 
     def second_chunk_fails(batch, **options):
         calls.append(batch)
-        if len(calls) == 2:
+        if len(calls) % 2 == 0:
             raise SolveError(
                 "model: the phase spent its step budget (scenario 1 of 3)",
                 {1: "model: the phase spent its step budget"},
@@ -159,6 +159,12 @@ def test_a_scenario_the_model_cannot_solve_exits_1_naming_its_row(capsys, tmp_pa
     )
     assert [p.name for p in parts_folder(out).glob("part-*")] == ["part-00000.parquet"]
     assert not out.exists()
+    # Called from Python, the error's failures are by the sweep's rows.
+    sweep = Sweep(_varies("impact.speed=20:60"), 6, 3, chunk=3)
+    with pytest.raises(SolveError) as raised:
+        run_sweep(default_scene(), sweep, tmp_path / "again.parquet")
+    assert raised.value.failures == {4: "model: the phase spent its step budget"}
+    assert raised.value.scenario == 4
 
 
 def test_skipped_failures_are_rows_of_nulls_and_the_rest_are_solved(capsys, tmp_path, monkeypatch):

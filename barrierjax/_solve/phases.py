@@ -54,6 +54,15 @@ class SolveError(RuntimeError):
     def scenario(self) -> int | None:
         return min(self.failures) if self.failures else None
 
+    @classmethod
+    def of(cls, reasons: dict[int, str], size: int | None) -> SolveError:
+        """The error of the scenarios that failed, `reasons` by flat index, of a batch of
+        `size` (None for a single solve, whose index is 0)."""
+        first = min(reasons)
+        if size is None:
+            return cls(reasons[first])
+        return cls(f"{reasons[first]} (scenario {first} of {size})", reasons)
+
 
 class PhaseSolution(eqx.Module):
     """The end of one phase, its number of accepted and rejected steps, how it failed
@@ -188,12 +197,9 @@ def raise_failures(name: str, result, failures, phases: Sequence[str]):
     failed = np.flatnonzero((flat != SOLVED).any(axis=1))
     if failed.size == 0:
         return result
-    phase = lambda k: np.flatnonzero(flat[k])[0]
-    reasons = {int(k): messages[phase(k) * kinds + flat[k, phase(k)] - 1] for k in failed}
-    if np.ndim(failures) == 1:
-        raise SolveError(reasons[0])
-    first = int(failed[0])
-    raise SolveError(f"{reasons[first]} (scenario {first} of {len(flat)})", reasons)
+    phase = np.argmax(flat != SOLVED, axis=1)  # the first that failed
+    reasons = {int(k): messages[phase[k] * kinds + flat[k, phase[k]] - 1] for k in failed}
+    raise SolveError.of(reasons, None if np.ndim(failures) == 1 else len(flat))
 
 
 def sigma_end(rtol):

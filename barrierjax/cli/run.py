@@ -10,6 +10,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from ..hinge import SolveError
 from ..hinge.oblique import ObliqueImpact
 from ..hinge.response import RESULT_UNITS, kinetic_energy_balance
 from .cantilever import cantilever_number, run_cantilever
@@ -259,7 +260,7 @@ def run_command(args) -> int:
             jax.block_until_ready(result)
     except (NotImplementedError, ValueError) as error:
         raise _scene_error(error) from None
-    except RuntimeError as error:  # a failed solve, or a run-time check (equinox.error_if)
+    except (SolveError, jax.errors.JaxRuntimeError) as error:  # a failed solve; a check
         raise CommandError(model_error(error), EXIT_FAILED) from None
     data = result_dict(scene, result, name)
     data["occupant_risk"] = occupant_risk_dict(result)

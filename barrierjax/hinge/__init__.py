@@ -1,7 +1,8 @@
 """Rigid-plastic hinge mechanisms of a vehicle striking a beam on a backing (report ch. 3).
 
 A solve that fails (a spent step budget, say) raises a `SolveError` (a `RuntimeError`)
-naming the model, the phase and, in a batch, the scenario (`SolveError.scenario`)."""
+naming the model, the phase and, in a batch, the first scenario that failed
+(`SolveError.scenario`; every one, with its reason: `SolveError.failures`)."""
 
 from .._solve.phases import SolveError
 from .axial import axial_impact

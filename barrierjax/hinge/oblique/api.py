@@ -85,7 +85,8 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
             return raise_failures(result, outcome, moving_load)
         overtaken = np.flatnonzero(np.asarray(outcome.overtaken).ravel())
         if overtaken.size:
-            raise _failure({int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in overtaken}, outcome)
+            reasons = {int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in overtaken}
+            raise SolveError.of(reasons, _batch_size(outcome))
         spent = ~np.asarray(outcome.complete).ravel()
         if not spent.any():
             return result
@@ -100,17 +101,11 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
             f"pass max_steps={suggestion} or more"
             for k in np.flatnonzero(spent)
         }
-        raise _failure(reasons, outcome)
+        raise SolveError.of(reasons, _batch_size(outcome))
 
 
-def _failure(reasons: dict[int, str], outcome: Outcome) -> SolveError:
-    """The `SolveError` of the scenarios that failed, by flat index: the first's reason,
-    naming it in a batch."""
-    first = min(reasons)
-    if np.ndim(outcome.complete) == 0:
-        return SolveError(reasons[first])
-    size = np.size(outcome.complete)
-    return SolveError(f"{reasons[first]} (scenario {first} of {size})", reasons)
+def _batch_size(outcome: Outcome) -> int | None:
+    return None if np.ndim(outcome.complete) == 0 else int(np.size(outcome.complete))
 
 
 def _power_of_two_above(steps: float) -> int:
