@@ -3,6 +3,7 @@ import logging
 import os
 
 import jax
+import jax.extend.core
 import pytest
 
 from barrierjax import compilation_cache
@@ -88,3 +89,25 @@ def compilations(caplog):
         programs += [r.getMessage() for r in caplog.records if "XLA compilation" in r.getMessage()]
 
     return watch
+
+
+def _id_arrays(jaxpr, shape):
+    found = []
+    for eqn in jaxpr.eqns:
+        found += [v for v in eqn.outvars if v.aval.dtype == "uint32" and v.aval.shape == shape]
+        for param in eqn.params.values():
+            for sub in param if isinstance(param, (tuple, list)) else (param,):
+                if isinstance(sub, jax.extend.core.ClosedJaxpr):
+                    sub = sub.jaxpr
+                if isinstance(sub, jax.extend.core.Jaxpr):
+                    found += _id_arrays(sub, shape)
+    return found
+
+
+@pytest.fixture
+def id_arrays():
+    """`id_arrays(closed_jaxpr, shape)`: the uint32 arrays of `shape` anywhere in a jaxpr
+    (its loops' and branches' too). JAX differentiates a scatter whose indices may repeat
+    by scattering such ids over the whole operand and selecting by them: a pass over all
+    of it, where the scatter itself writes a row."""
+    return lambda closed, shape: _id_arrays(closed.jaxpr, tuple(shape))

@@ -94,13 +94,19 @@ def solve_queued(
         lane = jnp.nonzero(finished, size=refill, fill_value=lanes)[0]
         valid = lane < lanes
         lane_in = jnp.minimum(lane, lanes - 1)
-        problem = jnp.where(valid, order[jnp.minimum(owner[lane_in], n - 1)], n)
+        # Where there is no lane or no problem, an index out of range, each its own: every
+        # write below is to unique indices, and says so. JAX differentiates a scatter
+        # whose indices may repeat by scattering ids over the whole operand and selecting
+        # by them: the seeds' write then passed over every lane's whole buffer at every
+        # step of a derivative (the oblique model's batched gradient took twice as long,
+        # and longer the larger its step budget).
+        beyond = jnp.arange(refill, dtype=lane.dtype)
+        problem = jnp.where(valid, order[jnp.minimum(owner[lane_in], n - 1)], n + beyond)
         following = queued + jnp.cumsum(valid) - 1
         fresh = jax.vmap(start)(take(inputs, order[jnp.minimum(following, n - 1)]))
         following = jnp.where(following < count, following, n)
-        lane = jnp.where(valid, lane, lanes)
-        # Out-of-range indices (no lane, no problem) are dropped.
-        put = lambda old, new, index: old.at[index].set(new, mode="drop")
+        lane = jnp.where(valid, lane, lanes + beyond)
+        put = lambda old, new, index: old.at[index].set(new, mode="drop", unique_indices=True)
         done = finish_lanes(carry, lane_in)
         return (
             jax.tree.map(
@@ -119,7 +125,8 @@ def solve_queued(
         zeros = jax.tree.map(
             lambda b: jnp.zeros((refill, seed_rows, *b.shape[2:]), b.dtype), buffers(carry)
         )
-        return without_buffers(carry), busy, owner, queued, results, jnp.full(refill, lanes), zeros
+        nowhere = lanes + jnp.arange(refill)  # each out of range (see `refilled`)
+        return without_buffers(carry), busy, owner, queued, results, nowhere, zeros
 
     def body(state):
         carry, busy, owner, queued, results = state
@@ -130,7 +137,7 @@ def solve_queued(
             due, refilled, unchanged, carry, busy, owner, queued, results
         )
         seeded = jax.tree.map(
-            lambda old, new: old.at[lane, :seed_rows].set(new, mode="drop"),
+            lambda old, new: old.at[lane, :seed_rows].set(new, mode="drop", unique_indices=True),
             buffers(carry),
             seeds,
         )
