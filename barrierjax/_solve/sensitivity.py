@@ -9,12 +9,14 @@ product is linear in the tangents and the Jacobian depends on the primals alone,
 transposes it for `jax.grad` as J^T times the cotangent, never touching the solver's loop.
 """
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 
-def forward_jacobian_jvp(fn, n_differentiable=None, value_and_jacobian=None):
+def forward_jacobian_jvp(fn, n_differentiable=None, value_and_jacobian=None, arrays=False):
     """`fn(*scalars) -> PyTree` with a custom JVP built from its forward Jacobian.
 
     For scalars the primal is computed once, alongside all the directional derivatives (a
@@ -38,13 +40,24 @@ def forward_jacobian_jvp(fn, n_differentiable=None, value_and_jacobian=None):
     solve written to compile fast, where `fn` is written to run fast; and where it is a
     jitted function, every derivative of `fn`, whichever arguments carry tangents, runs one
     compiled program.
+
+    With `arrays`, a `vmap` of the wrapped function over its first `n_differentiable`
+    arguments calls `fn` and `value_and_jacobian` on the arrays they map over (flattened
+    into one axis of problems), where their own batching applies (sorted chunks, a queue),
+    rather than the scalar solve under `vmap`, which steps every member until the slowest
+    is done: a `vmap` of the gradient of 1,024 axial impacts took 18 minutes, against 54 s
+    on the arrays.
     """
     if value_and_jacobian is None:
         value_and_jacobian = lambda *params: forward_jacobian(fn, params, n_differentiable)
+    solve = fn
+    if arrays:
+        solve = _batched_as_arrays(fn, n_differentiable)
+        value_and_jacobian = _batched_as_arrays(value_and_jacobian, n_differentiable, 1)
 
     @jax.custom_jvp
     def wrapped(*params):
-        return fn(*params)
+        return solve(*params)
 
     @wrapped.defjvp
     def _jvp(params, tangents):
@@ -99,9 +112,44 @@ def _directions_as_problems(fn, inputs, fixed, basis):
     out, tangents = jax.jvp(lambda *x: fn(*x, *fixed), stacked, directions)
     first = jax.tree.map(lambda o: o[:batch], out)
 
-    def by_direction(t, o):
-        if not jnp.issubdtype(o.dtype, jnp.inexact):
-            return t  # counts and flags: float0, never read
-        return t.reshape((n, batch) + t.shape[1:])
+    # (Counts' and flags' tangents too: float0, never read, but shaped as the others.)
+    by_direction = lambda t: t.reshape((n, batch) + t.shape[1:])
+    return first, jax.tree.map(by_direction, tangents)
 
-    return first, jax.tree.map(by_direction, tangents, out)
+
+def _batched_as_arrays(fn, n_problem, directions_at=None):
+    """`fn`, whose `vmap` over its first `n_problem` arguments (those of them not mapped
+    over broadcast) is `fn` called on them flattened into one axis of problems, the
+    results' leading axes reshaped back. `directions_at`: the index of the one result that
+    holds, per leaf, a leading axis of directions before the problems' (a Jacobian). A
+    `vmap` over any other argument batches `fn` as JAX does."""
+
+    @jax.custom_batching.custom_vmap
+    def batched(*args):
+        return fn(*args)
+
+    @batched.def_vmap
+    def rule(axis_size, in_batched, *args):
+        mapped = [any(jax.tree.leaves(b)) for b in in_batched]
+        if not any(mapped) or any(mapped[n_problem:]):
+            axes = [jax.tree.map(lambda b: 0 if b else None, b) for b in in_batched]
+            out = jax.vmap(fn, in_axes=tuple(axes))(*args) if any(mapped) else fn(*args)
+            return out, jax.tree.map(lambda _: any(mapped), out)
+        shape = (axis_size, *jnp.shape(next(a for a, m in zip(args, mapped) if m))[1:])
+        problems = [jnp.broadcast_to(a, shape).reshape(-1) for a in args[:n_problem]]
+        # (Through `batched` again: an outer `vmap` then flattens its axis in too.)
+        out = batched(*problems, *args[n_problem:])
+        unflat = lambda leaf, lead=0: jnp.moveaxis(
+            leaf.reshape(leaf.shape[:lead] + shape + leaf.shape[lead + 1 :]), lead, 0
+        )
+        if directions_at is None:
+            out = jax.tree.map(unflat, out)
+        else:
+            leads = [int(k == directions_at) for k in range(len(out))]
+            out = tuple(
+                jax.tree.map(functools.partial(unflat, lead=lead), part)
+                for part, lead in zip(out, leads)
+            )
+        return out, jax.tree.map(lambda _: True, out)
+
+    return batched

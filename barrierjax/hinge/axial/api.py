@@ -40,7 +40,8 @@ def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string
             return one(mu, phi, eta)
         return sorted_chunks(one, (mu, phi, eta), mu * eta, _CHUNK)
 
-    r = forward_jacobian_jvp(stages, n_differentiable=3)(mu, safe_phi, eta0 * speed**2, rtol)
+    differentiable = forward_jacobian_jvp(stages, n_differentiable=3, arrays=True)
+    r = differentiable(mu, safe_phi, eta0 * speed**2, rtol)
     finish = functools.partial(_finish, n_history=n_history, string_cells=string_cells)
     return (finish if mu.ndim == 0 else jax.vmap(finish))(r, mu, phi, speed, yields, safe_phi)
 

@@ -173,6 +173,8 @@ def oblique_impact(
             functools.partial(solved, **options),
             n_differentiable=5,
             value_and_jacobian=functools.partial(_oblique_jacobian, **options),
+            # (A `vmap` of a scalar solve can only be around traced inputs.)
+            arrays=traced and inputs[0].ndim == 0,
         )
         if inputs[0].ndim == 0:
             return differentiable(*inputs, rtol, None)
