@@ -25,9 +25,8 @@ def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string
     the speed enters through eta0 V^2. `rtol` is traced: a new
     tolerance does not recompile. A flat array of scenarios is solved inside this `jit`,
     in sorted vmapped chunks (`_CHUNK`), and their derivatives taken as problems of their
-    own (`forward_jacobian_jvp`): a `vmap` around it, or over the derivatives' directions,
-    batches the whole traced model again (the batched gradient's first call of 100
-    problems took 31.5 s, then 24 s)."""
+    own (`forward_jacobian_jvp`); a `vmap` around a scalar call hands the chunks its arrays
+    (the scalar solve under `vmap` stepped every scenario until the slowest was done)."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)
 
