@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from barrierjax._solve.hermite import quintic_hermite
-from barrierjax.hinge import normal_impact
+from barrierjax.hinge import SolveError, normal_impact
 from barrierjax.hinge.oblique import moving_load, oblique_impact, results, transitions
 from barrierjax.hinge.oblique.phases import at_rest
 from barrierjax.hinge.oblique.results import displacement_field, vehicle_path
@@ -330,6 +330,14 @@ def test_spent_step_budget_grows_or_says_what_to_pass():
     given = moving_load(phi, vh, t_end, max_steps=suggested)
     assert int(given.steps) == int(grown.steps) and float(given.s1) == float(grown.s1)
     assert float(grown.s1) == pytest.approx(phi - math.sqrt(phi**2 - 1.0), rel=1e-6)
+
+
+def test_a_spent_budget_under_grad_says_what_to_pass():
+    # Outside a `jit`, the outcome's times carry tangents under `grad`: its message read
+    # them as numbers and raised JAX's TracerArrayConversionError instead.
+    exit_angle = lambda mu: oblique_impact(mu, 2.0, 0.3, 0.5, max_steps=16).exit_angle_deg
+    with pytest.raises(SolveError, match=r"max_steps=16 was spent in the crushing phase"):
+        jax.grad(exit_angle)(5.0)
 
 
 def test_float32_defaults_to_a_tolerance_it_can_meet():

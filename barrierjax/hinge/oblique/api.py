@@ -81,7 +81,10 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
     budget = _FIRST_BUDGET if max_steps is None else int(max_steps)
     while True:
         result, outcome = solve(budget)
-        if isinstance(outcome.complete, Tracer):
+        # (Under `jax.grad` outside a `jit` the outcome's times carry tangents, its flags
+        # none: read without them, it is concrete there.)
+        outcome = jax.lax.stop_gradient(outcome)
+        if isinstance(outcome.time, Tracer):
             return raise_failures(result, outcome, moving_load)
         overtaken = np.flatnonzero(np.asarray(outcome.overtaken).ravel())
         if overtaken.size:
