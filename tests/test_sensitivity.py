@@ -1,5 +1,5 @@
-"""barrierjax._solve.sensitivity: forward Jacobians behind a custom JVP, and with `arrays`
-a `vmap` that hands the solve its problems as arrays."""
+"""barrierjax._solve.sensitivity: forward Jacobians behind a custom JVP, and with
+`arrays_from` a `vmap` that hands the solve its problems as arrays."""
 
 import jax
 import jax.numpy as jnp
@@ -9,7 +9,7 @@ import pytest
 from barrierjax._solve.sensitivity import forward_jacobian_jvp
 
 
-def _recorded(arrays=True):
+def _recorded(arrays_from=1):
     """A solve of independent problems (elementwise in a and b; k fixed), the wrapped
     function, and the shapes the solve ran with (tracing apart: `custom_vmap` traces it on
     scalars too)."""
@@ -19,7 +19,7 @@ def _recorded(arrays=True):
         jax.debug.callback(lambda x: shapes.append(np.shape(x)), a)
         return {"y": a**2 * b + k, "steps": jnp.zeros(jnp.shape(a), jnp.int32)}
 
-    return forward_jacobian_jvp(solve, n_differentiable=2, arrays=arrays), shapes
+    return forward_jacobian_jvp(solve, n_differentiable=2, arrays_from=arrays_from), shapes
 
 
 A = jnp.linspace(0.5, 2.0, 6)
@@ -53,6 +53,13 @@ def test_nested_vmaps_and_an_unmapped_argument_are_flattened_into_one_axis():
     assert all(shape == (12,) for shape in shapes)
 
 
+def test_a_vmap_of_fewer_problems_than_arrays_from_batches_the_solve_as_jax_does():
+    wrapped, shapes = _recorded(arrays_from=7)
+    y = jax.vmap(lambda a, b: wrapped(a, b, 3.0)["y"])(A, B)
+    np.testing.assert_allclose(y, A**2 * B + 3.0, rtol=1e-14)
+    assert shapes == [()] * 6
+
+
 def test_a_vmap_over_a_fixed_argument_batches_the_solve_as_jax_does():
     wrapped, shapes = _recorded()
     k = jnp.arange(6.0)
@@ -61,8 +68,8 @@ def test_a_vmap_over_a_fixed_argument_batches_the_solve_as_jax_does():
     assert all(shape == () for shape in shapes)
 
 
-@pytest.mark.parametrize("arrays", [False, True])
-def test_a_scalar_jacobian_is_unchanged(arrays):
-    wrapped, _ = _recorded(arrays)
+@pytest.mark.parametrize("arrays_from", [None, 1])
+def test_a_scalar_jacobian_is_unchanged(arrays_from):
+    wrapped, _ = _recorded(arrays_from)
     jacobian = jax.jacfwd(lambda x: wrapped(x[0], x[1], 3.0)["y"])(jnp.array([1.5, 2.0]))
     np.testing.assert_allclose(jacobian, [6.0, 2.25], rtol=1e-14)

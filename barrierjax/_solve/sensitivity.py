@@ -10,13 +10,14 @@ transposes it for `jax.grad` as J^T times the cotangent, never touching the solv
 """
 
 import functools
+import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 
-def forward_jacobian_jvp(fn, n_differentiable=None, value_and_jacobian=None, arrays=False):
+def forward_jacobian_jvp(fn, n_differentiable=None, value_and_jacobian=None, arrays_from=None):
     """`fn(*scalars) -> PyTree` with a custom JVP built from its forward Jacobian.
 
     For scalars the primal is computed once, alongside all the directional derivatives (a
@@ -41,19 +42,21 @@ def forward_jacobian_jvp(fn, n_differentiable=None, value_and_jacobian=None, arr
     jitted function, every derivative of `fn`, whichever arguments carry tangents, runs one
     compiled program.
 
-    With `arrays`, a `vmap` of the wrapped function over its first `n_differentiable`
-    arguments calls `fn` and `value_and_jacobian` on the arrays they map over (flattened
-    into one axis of problems), where their own batching applies (sorted chunks, a queue),
-    rather than the scalar solve under `vmap`, which steps every member until the slowest
-    is done: a `vmap` of the gradient of 1,024 axial impacts took 18 minutes, against 54 s
-    on the arrays.
+    With `arrays_from`, a `vmap` of the wrapped function over its first `n_differentiable`
+    arguments, of that many problems or more, calls `fn` and `value_and_jacobian` on the
+    arrays they map over (flattened into one axis of problems), where their own batching
+    applies (sorted chunks, a queue), rather than the scalar solve under `vmap`, which
+    steps every member until the slowest is done: a `vmap` of the gradient of 1,024 axial
+    impacts took 18 minutes, against 54 s on the arrays.
     """
     if value_and_jacobian is None:
         value_and_jacobian = lambda *params: forward_jacobian(fn, params, n_differentiable)
     solve = fn
-    if arrays:
-        solve = _batched_as_arrays(fn, n_differentiable)
-        value_and_jacobian = _batched_as_arrays(value_and_jacobian, n_differentiable, 1)
+    if arrays_from is not None:
+        solve = _batched_as_arrays(fn, n_differentiable, arrays_from)
+        value_and_jacobian = _batched_as_arrays(
+            value_and_jacobian, n_differentiable, arrays_from, directions_at=1
+        )
 
     @jax.custom_jvp
     def wrapped(*params):
@@ -117,25 +120,32 @@ def _directions_as_problems(fn, inputs, fixed, basis):
     return first, jax.tree.map(by_direction, tangents)
 
 
-def _batched_as_arrays(fn, n_problem, directions_at=None):
+def _batched_as_arrays(fn, n_problem, smallest, directions_at=None):
     """`fn`, whose `vmap` over its first `n_problem` arguments (those of them not mapped
     over broadcast) is `fn` called on them flattened into one axis of problems, the
     results' leading axes reshaped back. `directions_at`: the index of the one result that
     holds, per leaf, a leading axis of directions before the problems' (a Jacobian). A
-    `vmap` over any other argument batches `fn` as JAX does."""
+    `vmap` over any other argument, or of fewer than `smallest` problems, batches `fn` as
+    JAX does."""
 
     @jax.custom_batching.custom_vmap
     def batched(*args):
         return fn(*args)
 
+    def rule_as_jax(axis_size, in_batched, *args):
+        mapped = [any(jax.tree.leaves(b)) for b in in_batched]
+        axes = [jax.tree.map(lambda b: 0 if b else None, b) for b in in_batched]
+        out = jax.vmap(fn, in_axes=tuple(axes))(*args) if any(mapped) else fn(*args)
+        return out, jax.tree.map(lambda _: any(mapped), out)
+
     @batched.def_vmap
     def rule(axis_size, in_batched, *args):
         mapped = [any(jax.tree.leaves(b)) for b in in_batched]
         if not any(mapped) or any(mapped[n_problem:]):
-            axes = [jax.tree.map(lambda b: 0 if b else None, b) for b in in_batched]
-            out = jax.vmap(fn, in_axes=tuple(axes))(*args) if any(mapped) else fn(*args)
-            return out, jax.tree.map(lambda _: any(mapped), out)
+            return rule_as_jax(axis_size, in_batched, *args)
         shape = (axis_size, *jnp.shape(next(a for a, m in zip(args, mapped) if m))[1:])
+        if math.prod(shape) < smallest:
+            return rule_as_jax(axis_size, in_batched, *args)
         problems = [jnp.broadcast_to(a, shape).reshape(-1) for a in args[:n_problem]]
         # (Through `batched` again: an outer `vmap` then flattens its axis in too.)
         out = batched(*problems, *args[n_problem:])

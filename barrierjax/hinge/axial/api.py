@@ -39,7 +39,7 @@ def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string
             return one(mu, phi, eta)
         return sorted_chunks(one, (mu, phi, eta), mu * eta, _CHUNK)
 
-    differentiable = forward_jacobian_jvp(stages, n_differentiable=3, arrays=True)
+    differentiable = forward_jacobian_jvp(stages, n_differentiable=3, arrays_from=_CHUNK)
     r = differentiable(mu, safe_phi, eta0 * speed**2, rtol)
     finish = functools.partial(_finish, n_history=n_history, string_cells=string_cells)
     return (finish if mu.ndim == 0 else jax.vmap(finish))(r, mu, phi, speed, yields, safe_phi)
