@@ -132,20 +132,15 @@ def _batched_as_arrays(fn, n_problem, smallest, directions_at=None):
     def batched(*args):
         return fn(*args)
 
-    def rule_as_jax(axis_size, in_batched, *args):
-        mapped = [any(jax.tree.leaves(b)) for b in in_batched]
-        axes = [jax.tree.map(lambda b: 0 if b else None, b) for b in in_batched]
-        out = jax.vmap(fn, in_axes=tuple(axes))(*args) if any(mapped) else fn(*args)
-        return out, jax.tree.map(lambda _: any(mapped), out)
-
     @batched.def_vmap
     def rule(axis_size, in_batched, *args):
         mapped = [any(jax.tree.leaves(b)) for b in in_batched]
-        if not any(mapped) or any(mapped[n_problem:]):
-            return rule_as_jax(axis_size, in_batched, *args)
-        shape = (axis_size, *jnp.shape(next(a for a, m in zip(args, mapped) if m))[1:])
-        if math.prod(shape) < smallest:
-            return rule_as_jax(axis_size, in_batched, *args)
+        as_arrays = any(mapped) and not any(mapped[n_problem:])
+        shape = (axis_size, *jnp.shape(args[mapped.index(True)])[1:]) if as_arrays else ()
+        if not as_arrays or math.prod(shape) < smallest:
+            axes = [jax.tree.map(lambda b: 0 if b else None, b) for b in in_batched]
+            out = jax.vmap(fn, in_axes=tuple(axes))(*args) if any(mapped) else fn(*args)
+            return out, jax.tree.map(lambda _: any(mapped), out)
         problems = [jnp.broadcast_to(a, shape).reshape(-1) for a in args[:n_problem]]
         # (Through `batched` again: an outer `vmap` then flattens its axis in too.)
         out = batched(*problems, *args[n_problem:])
