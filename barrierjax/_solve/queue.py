@@ -60,6 +60,13 @@ def solve_queued(
     order = jnp.arange(n) if order is None else jnp.asarray(order)
     take = lambda tree, index: jax.tree.map(lambda a: a[index], tree)
     lanes_running = jax.vmap(running)
+    # Where a refill has no lane or no problem, an index out of range, each its own: every
+    # write of a refill is to unique indices, and says so. JAX differentiates a scatter
+    # whose indices may repeat by scattering ids over the whole operand and selecting by
+    # them: the seeds' write then passed over every lane's whole buffer at every step of a
+    # derivative (the oblique model's batched gradient took twice as long, and longer the
+    # larger its step budget).
+    beyond = jnp.arange(refill)
 
     carry = jax.vmap(start)(take(inputs, order[:lanes]))
     owner = jnp.arange(lanes)  # the place in the queue of each lane's problem; n: none
@@ -94,13 +101,6 @@ def solve_queued(
         lane = jnp.nonzero(finished, size=refill, fill_value=lanes)[0]
         valid = lane < lanes
         lane_in = jnp.minimum(lane, lanes - 1)
-        # Where there is no lane or no problem, an index out of range, each its own: every
-        # write below is to unique indices, and says so. JAX differentiates a scatter
-        # whose indices may repeat by scattering ids over the whole operand and selecting
-        # by them: the seeds' write then passed over every lane's whole buffer at every
-        # step of a derivative (the oblique model's batched gradient took twice as long,
-        # and longer the larger its step budget).
-        beyond = jnp.arange(refill, dtype=lane.dtype)
         problem = jnp.where(valid, order[jnp.minimum(owner[lane_in], n - 1)], n + beyond)
         following = queued + jnp.cumsum(valid) - 1
         fresh = jax.vmap(start)(take(inputs, order[jnp.minimum(following, n - 1)]))
@@ -125,8 +125,7 @@ def solve_queued(
         zeros = jax.tree.map(
             lambda b: jnp.zeros((refill, seed_rows, *b.shape[2:]), b.dtype), buffers(carry)
         )
-        nowhere = lanes + jnp.arange(refill)  # each out of range (see `refilled`)
-        return without_buffers(carry), busy, owner, queued, results, nowhere, zeros
+        return without_buffers(carry), busy, owner, queued, results, lanes + beyond, zeros
 
     def body(state):
         carry, busy, owner, queued, results = state
