@@ -1,6 +1,8 @@
 """Exit boxes: a straight exit path against its closed form, a path that leaves the box,
 the oblique model's result, gradients and bad input."""
 
+from types import SimpleNamespace
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -42,6 +44,22 @@ def test_gradient_of_the_margin_in_the_exit_angle():
     grad = float(jax.grad(margin)(15.0))
     expected = -10.0 / np.cos(np.radians(15.0)) ** 2 * np.pi / 180.0
     assert grad == pytest.approx(expected, rel=1e-10)
+
+
+def test_the_exit_angle_counts_wherever_the_vehicle_leaves():
+    """The straight exit path is judged over the box's whole length, wherever along the
+    barrier the vehicle leaves: from x = 0.415 m, (x + B) - x rounds above B, and the
+    check once dropped the path's far end, judging the exit offset alone."""
+    history = SimpleNamespace(
+        vehicle_displacement=jnp.asarray([0.0, 0.3]), vehicle_position=jnp.asarray([0.0, 0.0])
+    )
+    _, b = mash_exit_box(5.0, 2.0)
+    for start in (0.0, 0.415, 0.54, 3.29565875):
+        history.vehicle_position = jnp.asarray([0.0, start])
+        result = SimpleNamespace(history=history, exit_angle_deg=jnp.asarray(15.0))
+        check = result_exit_box(result, 5.0, 2.0)
+        expected = 2.0 - 0.3 + b * np.tan(np.radians(15.0))
+        assert float(check.largest_offset) == pytest.approx(expected, rel=1e-12), start
 
 
 def test_oblique_result_against_its_exit_angle():

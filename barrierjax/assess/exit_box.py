@@ -66,8 +66,9 @@ def result_exit_box(result, vehicle_length, vehicle_width, box: str = "MASH") ->
     width_a = spec.offset + vehicle_width + spec.length_factor * vehicle_length
     exit_offset = vehicle_width - history.vehicle_displacement[-1]
     rise = spec.downstream * jnp.tan(jnp.radians(result.exit_angle_deg))
-    start = history.vehicle_position[-1]
-    along = jnp.stack([start, start + spec.downstream])
+    # Measured from the loss of contact, not from the vehicle's position there: (x + B) - x
+    # rounds above B for one x in five, and the box's far end then fell outside the box.
+    along = jnp.stack([jnp.zeros_like(rise), jnp.full_like(rise, spec.downstream)])
     return exit_box_check(
         along, jnp.stack([exit_offset, exit_offset + rise]), width_a, spec.downstream
     )
