@@ -37,6 +37,23 @@ def test_path_beyond_the_box_length_is_not_judged():
     assert float(exit_box_check(along, offset, 4.0, 10.0).largest_offset) == 3.0
 
 
+def test_a_path_sampled_across_the_box_end_is_judged_at_it():
+    """A straight path rising at 15 degrees, sampled every 3 m past B = 10 m: its offset
+    at B is the largest within the box, between the samples at 9 and 12 m (the sample
+    at 9 m alone under-reads it by 1 m's rise). A vehicle at rest short of B stays put."""
+    along = jnp.arange(0.0, 22.0, 3.0)
+    offset = 1.5 + along * jnp.tan(jnp.radians(15.0))
+    check = exit_box_check(along, offset, 5.0, 10.0)
+    expected = 1.5 + 10.0 * np.tan(np.radians(15.0))
+    assert float(check.largest_offset) == pytest.approx(expected, rel=1e-12)
+    grad = jax.grad(lambda o: exit_box_check(along, o, 5.0, 10.0).margin)(offset)
+    np.testing.assert_allclose(grad, -np.array([0, 0, 0, 2 / 3, 1 / 3, 0, 0, 0]), atol=1e-15)
+    stopped = exit_box_check(
+        jnp.asarray([0.0, 2.0, 4.0, 4.0]), jnp.asarray([1.0, 2.0, 2.5, 2.5]), 5.0, 10.0
+    )
+    assert float(stopped.largest_offset) == 2.5
+
+
 def test_gradient_of_the_margin_in_the_exit_angle():
     def margin(angle):
         return exit_box_check(*straight(1.5, angle, 4.0), 5.0, 10.0).margin

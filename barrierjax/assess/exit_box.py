@@ -5,11 +5,12 @@ dimensions, with their sources, are `barrierjax.assess.matrices.EXIT_BOXES`
 (`mash_exit_box`, `cen_exit_box`).
 
 `exit_box_check` judges a sampled path of the vehicle's wheel track farthest from the
-barrier; past its last sample the path runs on straight. `result_exit_box` judges an oblique
-impact's result: the report's vehicle leaves the barrier with its exit speed and angle and
-moves on straight (nothing acts on it after the loss of contact, where its history ends); it
-is a point that does not turn, so its far wheel track is taken at the vehicle's width from
-the barrier's face at contact, moving with the point.
+barrier, linear between its samples; past its last sample the path runs on straight.
+`result_exit_box` judges an oblique impact's result: the report's vehicle leaves the
+barrier with its exit speed and angle and moves on straight (nothing acts on it after the
+loss of contact, where its history ends); it is a point that does not turn, so its far
+wheel track is taken at the vehicle's width from the barrier's face at contact, moving
+with the point.
 """
 
 import equinox as eqx
@@ -41,13 +42,20 @@ def exit_box_check(along, offset, width_a, length_b) -> ExitBoxCheck:
             f"along and offset must be 1-D paths of the same length >= 2; got {along.shape}, {offset.shape}"
         )
     travelled = along - along[0]
-    slope = (offset[-1] - offset[-2]) / (along[-1] - along[-2])
-    at_end = offset[-1] + slope * jnp.maximum(length_b - travelled[-1], 0.0)
-    inside = travelled <= length_b
-    largest = jnp.maximum(
-        jnp.max(jnp.where(inside, offset, -jnp.inf)),
-        jnp.where(travelled[-1] < length_b, at_end, -jnp.inf),
-    )
+    # The path is judged up to where it first passes B, and at B itself: linear between
+    # the samples either side (the sample before it alone under-reads a rising path by up
+    # to a sample's rise), or, where the samples end short of B, along their last direction.
+    beyond = travelled > length_b
+    crossed = jnp.any(beyond)
+    last = along.shape[0] - 1
+    hi = jnp.where(crossed, jnp.argmax(beyond), last)
+    lo = hi - 1
+    run = travelled[hi] - travelled[lo]
+    still = run == 0.0  # (a vehicle at rest: its path goes no further)
+    slope = jnp.where(still, 0.0, (offset[hi] - offset[lo]) / jnp.where(still, 1.0, run))
+    at_box_end = offset[lo] + slope * (length_b - travelled[lo])
+    inside = jnp.cumsum(beyond) == 0
+    largest = jnp.maximum(jnp.max(jnp.where(inside, offset, -jnp.inf)), at_box_end)
     return ExitBoxCheck(passed=largest <= width_a, largest_offset=largest, margin=width_a - largest)
 
 
