@@ -1,4 +1,4 @@
-"""Quintic Hermite interpolation on one interval."""
+"""Hermite interpolation on one interval, as polynomials in the fraction of it."""
 
 import numpy as np
 
@@ -38,15 +38,30 @@ class Quintic:
     def __call__(self, u, derivatives: int = 2):
         """Value, slope and second derivative in x at the fraction `u` of the interval;
         with `derivatives=1`, value and slope alone (the second is then not traced)."""
-        value, slope, half_second = self.powers[5], 0.0, 0.0
-        for power in self.powers[4::-1]:
-            if derivatives == 2:
-                half_second = half_second * u + slope
-            slope = slope * u + value
-            value = value * u + power
-        if derivatives == 1:
-            return value, slope / self.width
-        return value, slope / self.width, 2.0 * half_second / self.width**2
+        return polynomial(self.powers, self.width, u, derivatives)
+
+
+def polynomial(powers, width, u, derivatives: int = 2):
+    """The polynomial sum_k powers[k] u^k on an interval of `width` (x = u width), by
+    Horner's rule: its value, slope and (`derivatives=2`) second derivative in x at u."""
+    value, slope, half_second = powers[-1], 0.0, 0.0
+    for power in powers[-2::-1]:
+        if derivatives == 2:
+            half_second = half_second * u + slope
+        slope = slope * u + value
+        value = value * u + power
+    if derivatives == 1:
+        return value, slope / width
+    return value, slope / width, 2.0 * half_second / width**2
+
+
+def cubic_powers(width, left, right):
+    """The powers of u of the cubic Hermite interpolant on an interval of `width` through
+    (value, slope) at both ends, the slopes in x = u width (padded to six, as `Quintic`'s)."""
+    (p0, s0), (p1, s1) = left, right
+    s0, s1 = width * s0, width * s1
+    zero = 0.0 * p0
+    return (p0, s0, -3.0 * p0 - 2.0 * s0 + 3.0 * p1 - s1, 2.0 * p0 + s0 - 2.0 * p1 + s1, zero, zero)
 
 
 def quintic_hermite(u, width, left, right, derivatives: int = 2):

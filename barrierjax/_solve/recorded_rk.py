@@ -306,9 +306,10 @@ class RecordedRK(eqx.Module):
     solve. Each stage starts with a step of length zero, which evaluates its field; a
     stage whose event is not positive there ends after it.
 
-    `past = view(y, stage, recording, previous)` is taken at the start of each step and
-    serves every stage of it; `previous` is the last step's, or None at the start, so that
-    a view can be found from the one before. `record(y, f, rate, stage, past, args)` gives
+    `past = view(y, f, h, stage, recording, previous)` is taken at the start of each step
+    (`h` the length the step will try, unless `max_step` bounds it) and serves every stage
+    of it; `previous` is the last step's, or None at the start, so that a view can be
+    found from the one before. `record(y, f, rate, stage, past, args)` gives
     the sample appended to the recording after each accepted step (and at each stage's
     start and end), with `f` the field there and `rate` its derivative along the solution;
     `max_step(y, f, stage, past, args)` bounds the step, for example so that the stages
@@ -351,7 +352,7 @@ class RecordedRK(eqx.Module):
             h=h,
             event=event,
             recording=recording,
-            past=self.view(y, stage, recording, None),
+            past=self.view(y, f, h, stage, recording, None),
             stage=stage,
             args=args,
             mode=jnp.asarray(_START),
@@ -388,7 +389,7 @@ class RecordedRK(eqx.Module):
         with the stages in a loop: a fraction of the operations to compile (seconds
         instead of tens of seconds for a gradient)."""
         y, f, r, stage, args = carry.y, carry.f, carry.rate, carry.stage, carry.args
-        past = self.view(y, stage, carry.recording, carry.past)
+        past = self.view(y, f, carry.h, stage, carry.recording, carry.past)
         stepping = carry.mode == _STEP
         # Step lengths are a discretisation choice: no derivative flows through them.
         bound = self.max_step(y, f, stage, past, args)

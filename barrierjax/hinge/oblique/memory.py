@@ -24,7 +24,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
 from ..._custom_types import Scalar
-from ..._solve.hermite import quintic_hermite
+from ..._solve.hermite import Quintic, cubic_powers, polynomial
 from ..._solve.recorded_rk import Recording
 
 # The columns of the recording that hold the right hinge's trace.
@@ -46,109 +46,155 @@ def _interval(recording: Recording, x, first, last):
     return lo
 
 
-# The samples of the right hinge's trace that one step of the load may read: the step is
-# bounded to stay within them (`max_step`). A step of the load crosses about as many
-# samples as a step of the hinge records, one.
+# The samples of the right hinge's trace that one step's view holds (`read_past`): the
+# interval holding the load lies in the last step's view.
 _WINDOW = 8
+
+# How far past the end of its interval of the trace (as a multiple of the distance to it
+# at the step's start) a step may take the load: the piece formed for the interval is
+# read a little beyond it rather than the step ending a rounding short of its end.
+_PAST_SAMPLE = 1.01
+
+# Intervals of the trace shorter than this fraction of the load's step (as the controller
+# would take it) are spanned by one piece.
+_SPAN = 0.1
 
 
 class Past(eqx.Module):
-    """What a step reads of the right hinge's recorded trace: `_WINDOW` consecutive
-    samples (H, Phi, dPhi/dH, d2Phi/dH2) from `start` (H = +inf past the last recorded
-    one), the segment's bounds (`Params.segment`) and `reach`, the furthest position the
-    window covers."""
+    """What a step reads of the right hinge's recorded trace: Psi on the interval holding
+    the load, as a polynomial in the fraction u of the interval (`origin`, `width`,
+    `powers`); where the step crosses the interval's end (`joint`, +inf where it does
+    not), on the next interval too (`width_next`, `powers_next`); how far the load may
+    go on them (`room`); and, for the next step's view, the `_WINDOW` consecutive
+    samples' positions from `start` (+inf past the last recorded one)."""
 
+    origin: Scalar
+    width: Scalar
+    powers: tuple[Scalar, ...]
+    joint: Scalar
+    width_next: Scalar
+    powers_next: tuple[Scalar, ...]
+    room: Scalar
     hinge: Float[Array, " window"]
-    rotation: Float[Array, " window"]
-    curvature: Float[Array, " window"]
-    curvature_rate: Float[Array, " window"]
     start: Int[Array, ""]
-    first: Int[Array, ""]
-    last: Int[Array, ""]
-    reach: Scalar
 
 
-def read_past(y, stage, recording: Recording, previous: Past | None = None) -> Past:
-    """The window of the trace from the interval holding the load, found once per step:
-    by bisection, or from `previous`, the last step's window. The load only advances,
-    and each step keeps it short of its window's reach (`max_step`), so the interval
-    holding it now lies in the last window."""
+def read_past(y, f, h, stage, recording: Recording, previous: Past | None = None) -> Past:
+    """Psi on the interval of the trace holding the load, formed once per step: the
+    interval by bisection, or from `previous`, the last step's view. The load only
+    advances, and each step keeps it within its interval (`room`, `max_step`), so the
+    interval holding it now lies in the last view.
+
+    The piece is Psi's quintic Hermite interpolant through the interval's ends (Phi,
+    dPhi/dH, d2Phi/dH2), which is C2 with error O(step^6): the force reads Psi', and a
+    lower-order or less smooth interpolant would put a kink into the vector field at
+    every recorded sample the load crosses, outside the step control (with cubic Hermite,
+    the error fell only as rtol^0.5). Only the segment's samples are read (`Stage.first`
+    to `Stage.last`), so that a lookup at a jump of Psi' (recorded twice, left and right
+    limits) takes the side the load is on whatever the rounding. Next to a breakpoint the
+    second derivatives are one-sided limits of a fast-changing trace: the piece is cubic
+    there (the second-derivative data dropped), which stays stable where breakpoints
+    cluster. Past the segment's last sample (only within a step, which then ends or is
+    retaken at the segment's end), linear: the second derivative there can be the
+    one-sided limit at a breakpoint, orders of magnitude off a step away (at S*, for
+    large force ratios).
+
+    Formed once, a step's seven field evaluations each read it by Horner's rule, where
+    each picked the interval from the window and formed it (a third of a batch's step,
+    benchmarks/README.md, "Twenty-seventh pass"). A step that the controller would take
+    past the interval's end is given the next interval's piece too, and each evaluation
+    reads the one its position lies on: in a moving load's steady state the load crosses
+    a sample every step (bounded to one interval, its steps would shrink to the gaps they
+    record, generation after generation)."""
+    x = y.position
     first, last = stage.first, stage.last
     recorded = jnp.maximum(recording.count - 1, 0)
     last = jnp.minimum(last, recorded)
     if previous is None:
-        interval = _interval(recording, y.position, first, last)
+        interval = _interval(recording, x, first, last)
     else:
-        below = jnp.sum(previous.hinge <= y.position).astype(previous.start.dtype)
+        below = jnp.sum(previous.hinge <= x).astype(previous.start.dtype)
         interval = previous.start + jnp.maximum(below - 1, 0)
         interval = jnp.clip(interval, first, jnp.maximum(last - 1, first))
     start = jnp.minimum(interval, recording.capacity - _WINDOW)
     window = recording.rows(start, _WINDOW, MEMORY)
-    filled = start + jnp.arange(_WINDOW, dtype=start.dtype) <= recorded
+    offsets = jnp.arange(_WINDOW, dtype=start.dtype)
+    filled = start + offsets <= recorded
     hinge = jnp.where(filled, window.pop("hinge"), jnp.inf)
     reach = jnp.max(jnp.where(filled, hinge, -jnp.inf))
-    return Past(hinge=hinge, **window, start=start, first=first, last=last, reach=reach)
 
+    below = jnp.sum(hinge <= x).astype(start.dtype)
+    i = jnp.clip(start + below - 1, first, jnp.maximum(last - 1, first))
+    i = jnp.clip(i, start, start + _WINDOW - 2)
+    interior = i + 1 <= last
+    # Where the trace was recorded in steps much shorter than the load's (after a
+    # breakpoint, where the steps restart short), the piece spans those short intervals,
+    # so that the load's step is at least a fraction of what it would be: bounded to
+    # consecutive samples, it would record shorter steps in turn, generation after
+    # generation.
+    travel = 0.0 if f is None else jnp.maximum(f.position * h, 0.0)
+    short = hinge[1:] - hinge[:-1] < _SPAN * travel
+    spanned = jnp.cumprod(short | (offsets[:-1] <= i - start))
+    j = start + jnp.sum(spanned).astype(start.dtype)
+    j = jnp.clip(j, i + 1, jnp.minimum(last, start + _WINDOW - 1))
+    j = jnp.where(interior, j, i)
+    # (Picked by comparison, not indexing: under `vmap` an index is a gather, which XLA
+    # runs as a kernel of its own.)
+    pick = lambda samples, k: jnp.sum(jnp.where(offsets == k - start, samples, 0.0))
+    data = lambda k: tuple(pick(window[name], k) for name in MEMORY[1:])
 
-def _cubic_hermite(u, width, left, right):
-    """As `barrierjax._solve.hermite.quintic_hermite`, through (value, slope) at both ends."""
-    (p0, s0), (p1, s1) = left, right
-    u2, u3 = u * u, u * u * u
-    value = (
-        (2 * u3 - 3 * u2 + 1) * p0
-        + (u3 - 2 * u2 + u) * width * s0
-        + (-2 * u3 + 3 * u2) * p1
-        + (u3 - u2) * width * s1
+    def piece(i, j):
+        """Psi on samples i to j as (origin, width, powers): quintic, cubic at a bound,
+        linear from i where j = i (past the segment's last sample)."""
+        interior = j > i
+        h_i, h_j = pick(hinge, i), pick(hinge, j)
+        left, right = data(i), data(j)
+        width = jnp.where(interior, h_j - h_i, 1.0)
+        phi_i, slope_i, _ = left
+        zero = jnp.zeros_like(phi_i)
+        at_bound = (i == first) | (j == last)
+        powers = jax.tree.map(
+            lambda quintic, cubic, linear: jnp.where(
+                interior, jnp.where(at_bound, cubic, quintic), linear
+            ),
+            Quintic(width, left, right).powers,
+            cubic_powers(width, left[:2], right[:2]),
+            (phi_i, slope_i, zero, zero, zero, zero),
+        )
+        return h_i, h_j, width, powers
+
+    h_i, h_j, width, powers = piece(i, j)
+    within = interior & (x < h_j)
+    room = jnp.where(within, _PAST_SAMPLE * (h_j - x), 0.5 * jnp.maximum(reach - x, 0.0))
+    # Where the step would take the load past that piece's end, the next interval's too:
+    # the load crosses a sample in the step (in a moving load's steady state, every step).
+    k = jnp.minimum(j + 1, jnp.minimum(last, start + _WINDOW - 1))
+    _, h_k, width_next, powers_next = piece(j, k)
+    crossing = within & (k > j) & (room < travel)
+    joint = jnp.where(crossing, h_j, jnp.inf)
+    room = jnp.where(crossing, _PAST_SAMPLE * (h_k - x), room)
+    return Past(
+        origin=h_i,
+        width=width,
+        powers=powers,
+        joint=joint,
+        width_next=width_next,
+        powers_next=powers_next,
+        room=room,
+        hinge=hinge,
+        start=start,
     )
-    slope = (
-        (6 * u2 - 6 * u) * p0
-        + (3 * u2 - 4 * u + 1) * width * s0
-        + (-6 * u2 + 6 * u) * p1
-        + (3 * u2 - 2 * u) * width * s1
-    ) / width
-    return value, slope
 
 
 def slope_memory(past: Past, x, s_star):
-    """(Psi(x), Psi'(x)): Phi when the right hinge passed x, by quintic Hermite
-    interpolation of the recorded (H, Phi, dPhi/dH, d2Phi/dH2); zero ahead of the initial
-    hinge, x < S*.
-
-    The interpolant is C2 with error O(step^6): the force reads Psi', and a lower-order or
-    less smooth interpolant would put a kink into the vector field at every recorded
-    sample the load crosses, outside the step control (with cubic Hermite, the error fell
-    only as rtol^0.5).
-
-    Only the segment's samples are read, so that a lookup at a jump of Psi' (recorded
-    twice, left and right limits) takes the side the load is on whatever the rounding of
-    x. The interval is picked from the window by comparison, not indexing: under `vmap` an
-    index is a gather, which XLA runs as a kernel of its own."""
-    offsets = jnp.arange(_WINDOW, dtype=past.start.dtype)
-    below = jnp.sum(past.hinge <= x).astype(past.start.dtype)
-    i = jnp.clip(past.start + below - 1, past.first, jnp.maximum(past.last - 1, past.first))
-    i = jnp.clip(i, past.start, past.start + _WINDOW - 2)
-    interior = i + 1 <= past.last
-    j = jnp.where(interior, i + 1, i)
-    pick = lambda samples, k: jnp.sum(jnp.where(offsets == k - past.start, samples, 0.0))
-    data = lambda k: tuple(
-        pick(samples, k) for samples in (past.rotation, past.curvature, past.curvature_rate)
+    """(Psi(x), Psi'(x)): Phi when the right hinge passed x, from the step's piece of the
+    recorded trace (`read_past`); zero ahead of the initial hinge, x < S*."""
+    psi, dpsi = polynomial(past.powers, past.width, (x - past.origin) / past.width, 1)
+    joint = past.origin + past.width
+    psi_next, dpsi_next = polynomial(
+        past.powers_next, past.width_next, (x - joint) / past.width_next, 1
     )
-    h_i, h_j = pick(past.hinge, i), pick(past.hinge, j)
-    left, right = data(i), data(j)
-    width = jnp.where(interior, h_j - h_i, 1.0)
-    u = jnp.where(interior, (x - h_i) / width, 0.0)
-    psi, dpsi = quintic_hermite(u, width, left, right, derivatives=1)
-    # Next to a breakpoint the second derivatives are one-sided limits of a fast-changing
-    # trace: cubic there (the second-derivative data dropped), which stays stable where
-    # breakpoints cluster.
-    at_bound = (i == past.first) | (j == past.last)
-    cubic = _cubic_hermite(u, width, left[:2], right[:2])
-    psi, dpsi = (jnp.where(at_bound, c, q) for c, q in zip(cubic, (psi, dpsi)))
-    # Past the segment's last sample (only within a step, which then ends or is retaken at
-    # the segment's end): linear. The second derivative there can be the one-sided limit
-    # at a breakpoint, orders of magnitude off a step away (at S*, for large force ratios).
-    phi_i, slope_i, _ = left
-    psi = jnp.where(interior, psi, phi_i + slope_i * (x - h_i))
-    dpsi = jnp.where(interior, dpsi, slope_i)
+    on_next = x >= past.joint
+    psi, dpsi = jnp.where(on_next, psi_next, psi), jnp.where(on_next, dpsi_next, dpsi)
     ahead = x < s_star
     return jnp.where(ahead, 0.0, psi), jnp.where(ahead, 0.0, dpsi)

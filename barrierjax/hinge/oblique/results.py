@@ -118,7 +118,7 @@ def run_out_to_rest(y: State, f: State, stage: Stage, recording: Recording, p: P
             y.slope_work + rate.slope_work * slide,
         ),
     )
-    past = read_past(moved, stage, recording)
+    past = read_past(moved, None, 0.0, stage, recording)
     s1, s2, theta = at_rest(moved, stage, past, p)
     exit_normal = jnp.where(stage.separated, y.vehicle_normal, theta * vh)
     rest = eqx.tree_at(lambda s: (s.s1, s.s2, s.vehicle_normal), moved, (s1, s2, exit_normal))

@@ -180,17 +180,15 @@ def transition(y: State, f: State, stage: Stage, recording: Recording, past: Pas
 
 
 def max_step(y: State, f: State, stage: Stage, past: Past, p: Params):
-    """At most `_EFOLDS_PER_STEP` e-folds of V0; the load's position kept within the step's
-    window of the hinge's trace (at most half the gap to the window's reach); and a step
-    reaching the next breakpoint passes it by little: the stage ends on the step's
-    interpolant, and past the breakpoint its stages read the segment's memory
-    extrapolated."""
+    """At most `_EFOLDS_PER_STEP` e-folds of V0; the load kept within the interval of the
+    hinge's trace that the step reads (`Past.room`); and a step reaching the next
+    breakpoint passes it by little: the stage ends on the step's interpolant, and past
+    the breakpoint its stages read the segment's memory extrapolated."""
     efolds = jnp.where(stage.phase == CRUSHING, jnp.inf, _EFOLDS_PER_STEP / jnp.abs(f.speed))
     moving = f.position > 0.0
     per_distance = 1.0 / jnp.where(moving, f.position, 1.0)
-    gap = jnp.maximum(past.reach - y.position, 0.0)
     breakpoint = jnp.maximum(stage.breakpoints.position[0] - y.position, 0.0)
-    bound = jnp.minimum(0.5 * gap, _PAST_BREAKPOINT * breakpoint) * per_distance
+    bound = jnp.minimum(past.room, _PAST_BREAKPOINT * breakpoint) * per_distance
     return jnp.minimum(efolds, jnp.where(moving, bound, jnp.inf))
 
 
