@@ -133,10 +133,9 @@ def read_past(y, f, h, stage, recording: Recording, previous: Past | None = None
     # consecutive samples, it would record shorter steps in turn, generation after
     # generation.
     travel = 0.0 if f is None else jnp.maximum(f.position * h, 0.0)
-    short = hinge[1:] - hinge[:-1] < _SPAN * travel
-    spanned = jnp.cumprod(short | (offsets[:-1] <= i - start))
-    j = start + jnp.sum(spanned).astype(start.dtype)
-    j = jnp.clip(j, i + 1, jnp.minimum(last, start + _WINDOW - 1))
+    long = hinge[1:] - hinge[:-1] >= _SPAN * travel
+    ends = jnp.where(long & (offsets[:-1] > i - start), offsets[:-1], _WINDOW - 1)
+    j = jnp.clip(start + jnp.min(ends), i + 1, jnp.minimum(last, start + _WINDOW - 1))
     j = jnp.where(interior, j, i)
     # (Picked by comparison, not indexing: under `vmap` an index is a gather, which XLA
     # runs as a kernel of its own.)
