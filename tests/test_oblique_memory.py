@@ -1,0 +1,87 @@
+"""barrierjax.hinge.oblique.memory: the pieces of the hinge's trace that a step reads."""
+
+from types import SimpleNamespace
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from barrierjax._solve.hermite import quintic_hermite
+from barrierjax._solve.recorded_rk import Recording
+from barrierjax.hinge.oblique.memory import MEMORY, read_past, slope_memory
+
+jax.config.update("jax_enable_x64", True)
+
+psi = lambda h: np.sin(2.0 * h) + h**2 / 3.0
+dpsi = lambda h: 2.0 * np.cos(2.0 * h) + 2.0 * h / 3.0
+d2psi = lambda h: -4.0 * np.sin(2.0 * h) + 2.0 / 3.0
+
+
+def _trace(points):
+    """The right hinge's trace recorded at `points`, with Psi's exact derivatives there."""
+    recording = Recording.empty(MEMORY, 32, jnp.float64)
+    for h in points:
+        sample = dict(zip(MEMORY, (h, psi(h), dpsi(h), d2psi(h))))
+        recording = recording.append(sample)
+    return recording
+
+
+def _past(points, x, travel):
+    """The view of a step that starts with the load at `x` and that the controller would
+    take `travel` along the barrier, within one open segment (from the first sample on)."""
+    stage = SimpleNamespace(first=jnp.asarray(0, jnp.int32), last=jnp.asarray(32, jnp.int32))
+    y, f = SimpleNamespace(position=jnp.asarray(x)), SimpleNamespace(position=jnp.asarray(travel))
+    return read_past(y, f, 1.0, stage, _trace(points))
+
+
+def _interval_quintic(points, a, b, x):
+    """Psi' at x by the quintic Hermite interpolant of samples a and b (what a step reads
+    on that interval wherever it lies)."""
+    ends = [(psi(points[k]), dpsi(points[k]), d2psi(points[k])) for k in (a, b)]
+    width = points[b] - points[a]
+    return float(quintic_hermite((x - points[a]) / width, width, *ends, derivatives=1)[1])
+
+
+POINTS = [0.0, 0.3, 0.5, 0.9, 1.4, 2.0]
+
+
+def test_a_step_on_its_interval_reads_that_intervals_quintic():
+    past = _past(POINTS, 0.4, 0.05)
+    assert float(past.joint) == np.inf
+    assert float(past.room) == pytest.approx(1.01 * (0.5 - 0.4), rel=1e-12)
+    for x in (0.4, 0.45, 0.5):
+        _, slope = slope_memory(past, jnp.asarray(x), 0.0)
+        assert float(slope) == pytest.approx(_interval_quintic(POINTS, 1, 2, x), abs=1e-13)
+
+
+def test_a_step_crossing_a_sample_reads_each_intervals_own_quintic():
+    # The load at 0.4 would travel 0.3, past the sample at 0.5: the next interval's piece
+    # is formed too, and each position reads the piece of the interval it lies on (the
+    # one-interval view alone would end the step at 0.5).
+    past = _past(POINTS, 0.4, 0.3)
+    assert float(past.joint) == 0.5
+    assert float(past.room) == pytest.approx(1.01 * (0.9 - 0.4), rel=1e-12)
+    for x, (a, b) in ((0.42, (1, 2)), (0.499, (1, 2)), (0.5, (2, 3)), (0.6, (2, 3)), (0.9, (2, 3))):
+        _, slope = slope_memory(past, jnp.asarray(x), 0.0)
+        assert float(slope) == pytest.approx(_interval_quintic(POINTS, a, b, x), abs=1e-13), x
+    # And the two pieces meet at the sample: Psi' is continuous there to rounding.
+    below = slope_memory(past, jnp.asarray(np.nextafter(0.5, 0.0)), 0.0)[1]
+    above = slope_memory(past, jnp.asarray(0.5), 0.0)[1]
+    assert float(above) == pytest.approx(float(below), abs=1e-12)
+
+
+def test_a_cluster_of_short_intervals_is_spanned_by_one_piece():
+    # Samples recorded in steps a thousandth of the load's: the piece runs from the
+    # interval holding the load over the short ones to 1.004, and the step may cross into
+    # the long interval after it.
+    points = [0.0, 1.0, 1.001, 1.002, 1.004, 2.0, 3.0]
+    past = _past(points, 1.0005, 0.5)
+    assert float(past.origin) == 1.0 and float(past.width) == pytest.approx(0.004, rel=1e-12)
+    assert float(past.joint) == 1.004
+    assert float(past.room) == pytest.approx(1.01 * (2.0 - 1.0005), rel=1e-12)
+    _, slope = slope_memory(past, jnp.asarray(1.5), 0.0)
+    assert float(slope) == pytest.approx(_interval_quintic(points, 4, 5, 1.5), abs=1e-13)
+    # With no short interval, no span: the same cluster read by a step of 0.005.
+    short_step = _past(points, 1.0005, 0.005)
+    assert float(short_step.width) == pytest.approx(0.001, rel=1e-9)
