@@ -21,7 +21,7 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float, Int
+from jaxtyping import Array, Bool, Float, Int
 
 from ..._custom_types import Scalar
 from ..._solve.hermite import Quintic, cubic_powers, polynomial
@@ -63,14 +63,15 @@ _SPAN = 0.1
 class Past(eqx.Module):
     """What a step reads of the right hinge's recorded trace: Psi on the interval holding
     the load, as a polynomial in the fraction u of the interval (`origin`, `width`,
-    `powers`); where the step crosses the interval's end (`joint`, +inf where it does
-    not), on the next interval too (`width_next`, `powers_next`); how far the load may
-    go on them (`room`); and, for the next step's view, the `_WINDOW` consecutive
-    samples' positions from `start` (+inf past the last recorded one)."""
+    `powers`); where the step crosses the interval's end, `joint` (`crossing`), on the
+    next interval too (`width_next`, `powers_next`); how far the load may go on them
+    (`room`); and, for the next step's view, the `_WINDOW` consecutive samples' positions
+    from `start` (+inf past the last recorded one)."""
 
     origin: Scalar
     width: Scalar
     powers: tuple[Scalar, ...]
+    crossing: Bool[Array, ""]
     joint: Scalar
     width_next: Scalar
     powers_next: tuple[Scalar, ...]
@@ -170,13 +171,13 @@ def read_past(y, f, h, stage, recording: Recording, previous: Past | None = None
     k = jnp.minimum(j + 1, jnp.minimum(last, start + _WINDOW - 1))
     _, h_k, width_next, powers_next = piece(j, k)
     crossing = within & (k > j) & (room < travel)
-    joint = jnp.where(crossing, h_j, jnp.inf)
     room = jnp.where(crossing, _PAST_SAMPLE * (h_k - x), room)
     return Past(
         origin=h_i,
         width=width,
         powers=powers,
-        joint=joint,
+        crossing=crossing,
+        joint=h_j,
         width_next=width_next,
         powers_next=powers_next,
         room=room,
@@ -189,11 +190,10 @@ def slope_memory(past: Past, x, s_star):
     """(Psi(x), Psi'(x)): Phi when the right hinge passed x, from the step's piece of the
     recorded trace (`read_past`); zero ahead of the initial hinge, x < S*."""
     psi, dpsi = polynomial(past.powers, past.width, (x - past.origin) / past.width, 1)
-    joint = past.origin + past.width
     psi_next, dpsi_next = polynomial(
-        past.powers_next, past.width_next, (x - joint) / past.width_next, 1
+        past.powers_next, past.width_next, (x - past.joint) / past.width_next, 1
     )
-    on_next = x >= past.joint
+    on_next = past.crossing & (x >= past.joint)
     psi, dpsi = jnp.where(on_next, psi_next, psi), jnp.where(on_next, dpsi_next, dpsi)
     ahead = x < s_star
     return jnp.where(ahead, 0.0, psi), jnp.where(ahead, 0.0, dpsi)
