@@ -2,6 +2,7 @@
 the independent numpy reference (tests/reference_occupant_risk.py, written from the
 standards' text, sharing no code)."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -9,7 +10,7 @@ import pytest
 import reference_occupant_risk as reference
 import scipy.signal
 
-from barrierjax.assess import filters, occupant_risk
+from barrierjax.assess import filters, judge, occupant_risk
 from barrierjax.assess.matrices import G
 
 DT = 1e-4  # 10 kHz, as crash-test records are sampled
@@ -256,12 +257,28 @@ def test_gradients_in_pulse_amplitude_and_duration_match_finite_differences(name
         (dict(ay=np.zeros(5)), "ay must have the samples of t"),
         (dict(t=T[:2], ax=np.zeros(2), ay=np.zeros(2)), "t must be a 1-D array of at least 3"),
         (dict(asi_edition="2003"), "asi_edition must be one of"),
+        (dict(flail_x=np.nan), "flail_x must be positive and finite"),
+        (dict(flail_x=0.0), "flail_x must be positive and finite"),
+        (dict(flail_y=-0.3), "flail_y must be positive and finite"),
     ],
 )
 def test_bad_inputs_name_the_field_and_the_rule(change, message):
     kwargs = dict(t=T, ax=np.zeros_like(T), ay=np.zeros_like(T)) | change
     with pytest.raises(ValueError, match=message):
         occupant_risk(**kwargs)
+
+
+def test_judge_refuses_a_metric_that_is_not_finite_and_a_batch():
+    ax = half_sine(-150.0, 0.1)
+    risk = occupant_risk(T, ax, 0.3 * ax)
+    assert all(c.passed for c in judge(risk, "mash"))
+    for name, standard in (("oiv_x", "mash"), ("asi", "en1317"), ("ora_y", "nchrp350")):
+        broken = eqx.tree_at(lambda r: getattr(r, name), risk, jnp.asarray(np.nan))
+        with pytest.raises(ValueError, match=f"{name} must be finite to be judged"):
+            judge(broken, standard)
+    batch = occupant_risk(T, np.stack([ax, 2 * ax]), np.stack([ax, ax]))
+    with pytest.raises(ValueError, match="judge takes one record's OccupantRisk"):
+        judge(batch)
 
 
 def test_nan_inside_jit_raises_instead_of_propagating():

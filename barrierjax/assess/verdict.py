@@ -54,15 +54,26 @@ def _severity_class(asi: float, limit) -> Criterion:
     return Criterion("ASI", asi, "1", None, limit.maximum, verdict, source)
 
 
+_JUDGED = ("oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi")
+
+
 def judge(risk, standard: str = "mash") -> list[Criterion]:
-    """The criteria of `standard` ("mash", "nchrp350", "en1317") on one `OccupantRisk`."""
+    """The criteria of `standard` ("mash", "nchrp350", "en1317") on one `OccupantRisk`
+    (of a batch, index it first: `jax.tree.map(lambda a: a[i], risk)`). A metric that is
+    not finite is an error, never a verdict."""
     if standard not in OCCUPANT_LIMITS:
         raise ValueError(f"standard must be one of {', '.join(OCCUPANT_LIMITS)}; got {standard!r}")
     limits = OCCUPANT_LIMITS[standard]
-    value = {
-        name: float(np.asarray(getattr(risk, name)))
-        for name in ("oiv_x", "oiv_y", "ora_x", "ora_y", "thiv", "phd", "asi")
-    }
+    value = {name: np.asarray(getattr(risk, name)) for name in _JUDGED}
+    for name, metric in value.items():
+        if metric.ndim:
+            raise ValueError(
+                f"judge takes one record's OccupantRisk; {name} has shape {metric.shape} "
+                "(index the batch first: jax.tree.map(lambda a: a[i], risk))"
+            )
+        if not np.isfinite(metric):
+            raise ValueError(f"{name} must be finite to be judged; got {float(metric)}")
+    value = {name: float(metric) for name, metric in value.items()}
     if standard in ("mash", "nchrp350"):
         return [
             _against(limits["OIV"], "OIV x", abs(value["oiv_x"])),
