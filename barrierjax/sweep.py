@@ -27,6 +27,7 @@ import math
 import os
 import shutil
 from collections.abc import Callable
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -110,12 +111,27 @@ def draw(varies: list[Vary], n: int, seed: int, distribution: str = "uniform") -
 
 
 def _with_values(scene: Scene, varies: list[Vary], values) -> Scene:
-    """`scene` with each varied key an array of `values`' column."""
+    """`scene` with each varied key an array of `values`' column (one value each, of a
+    1-D `values`)."""
     for v, column in zip(varies, values.T, strict=True):
         parameter = v.field.parameter
         scene = eqx.tree_at(lambda s, v=v, p=parameter: getattr(getattr(s, v.field.section), p),
                             scene, column, is_leaf=lambda x: x is None)  # fmt: skip
     return scene
+
+
+def check_ranges(scene: Scene, varies: list[Vary]):
+    """Each range's ends put through the scene's constructors, whose rules every value
+    between them then meets (they are bounds: positive, non-negative, an angle in (0, 90]):
+    the drawn values are set on the scene's leaves, past the constructors."""
+    for v in varies:
+        for end, value in (("LOW", v.low), ("HIGH", v.high)):
+            section = getattr(_with_values(scene, [v], np.array([value])), v.field.section)
+            try:
+                type(section)(*(getattr(section, f.name) for f in dataclasses.fields(section)))
+            except ValueError as error:
+                shown = f"{value:g} {v.field.unit}".strip()
+                raise SweepError(f"--vary {v.key}: {end} {shown}: {error}") from None
 
 
 def result_columns(result: Result, n: int) -> dict[str, np.ndarray]:
@@ -199,6 +215,12 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
         raise SweepError(f"--chunk must be a positive integer; got {sweep.chunk}")
     if not sweep.varies:
         raise SweepError("nothing to vary: give at least one --vary KEY=LOW:HIGH")
+    keys = [v.key for v in sweep.varies]
+    for key in keys:
+        if keys.count(key) > 1:
+            raise SweepError(f"--vary {key}: given twice (one range a key)")
+    if isinstance(scene, Scene):
+        check_ranges(scene, sweep.varies)
     values = draw(sweep.varies, sweep.samples, sweep.seed, sweep.distribution)
     parts = parts_folder(out)
     manifest = sweep.manifest(scene)

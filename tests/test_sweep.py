@@ -118,6 +118,23 @@ def test_the_distributions_draw_within_the_range():
         (["--vary", "impact.speed"], "--vary impact.speed: expected impact.speed=LOW:HIGH"),
         (["--vary", "impact.speed=1:2", "--distribution", "beta"], "--distribution: unknown"),
         (["--vary", "impact.speed=1:2", "--samples", "0"], "--samples must be a positive"),
+        (
+            ["--vary", "impact.speed=1:2", "--vary", "impact.speed=3:4"],
+            "--vary impact.speed: given twice",
+        ),
+        # A range is put through the scene's rules at both ends before anything is drawn.
+        (
+            ["--vary", "impact.friction=-1:1"],
+            "--vary impact.friction: LOW -1: Impact.friction must be non-negative",
+        ),
+        (
+            ["--vary", "impact.angle=60 deg:120 deg"],
+            "--vary impact.angle: HIGH 120 deg: Impact.angle_deg must be in (0, 90]",
+        ),
+        (
+            ["--vary", "vehicle.mass=-1000:2000"],
+            "--vary vehicle.mass: LOW -1000 kg: Vehicle.mass must be positive",
+        ),
     ],
 )
 def test_bad_sweeps_exit_2_with_one_line_and_write_nothing(capsys, tmp_path, args, message):
