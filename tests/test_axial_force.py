@@ -1,6 +1,7 @@
 """Normal impact with axial force, the beam stage of report 3.4: `axial_impact(...,
 axial_ratio=eta0)`."""
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -166,6 +167,14 @@ def test_vmap_equals_loop(compilations):
 def test_bad_input_names_the_field(kwargs, field):
     with pytest.raises(ValueError, match=field):
         axial_impact(0.5, 2.0, 1.0, **kwargs)
+
+
+def test_float32_is_refused_with_the_switch_to_float64():
+    # In float32 every solve failed in the crushing phase ("a step size fell to nothing").
+    with jax.enable_x64(False):
+        with pytest.raises(ValueError, match="axial_impact needs float64.*jax_enable_x64"):
+            axial_impact(0.5, 2.0, 1.0, axial_ratio=5.0, rtol=1e-4)
+        assert axial_impact(0.5, 2.0, 1.0, axial_ratio=0).damage.dtype == np.float32
 
 
 def test_the_model_of_3_2_has_no_axial_force():

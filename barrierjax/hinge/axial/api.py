@@ -104,10 +104,16 @@ def axial_impact(
     padded with copies to the next power of two or whole chunk, so that batches of nearby
     sizes share one compiled program; on a CPU, 2,048 scenarios or more in parts run side
     by side, one a core); `rtol` is traced, so a new tolerance does not recompile. A
-    failed solve raises as in `normal_impact`, naming the stage.
+    failed solve raises as in `normal_impact`, naming the stage. Needs float64 (JAX's
+    `jax_enable_x64`); a Python `0` for `axial_ratio` runs in float32 too.
     """
     if isinstance(axial_ratio, int | float) and axial_ratio == 0:
         return normal_impact(mass_ratio, force_ratio, speed, rtol=rtol, n_history=n_history)
+    if jnp.result_type(float) != jnp.float64:
+        raise ValueError(
+            "axial_impact needs float64 (in float32 its crushing phase's steps shrink to "
+            'nothing at any rtol): jax.config.update("jax_enable_x64", True)'
+        )
     mu, phi, speed = checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history)
     eta0 = _checks.non_negative("axial_ratio", axial_ratio)
     if int(string_cells) != string_cells or string_cells < 2:
