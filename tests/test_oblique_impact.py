@@ -12,6 +12,7 @@ from barrierjax._solve.hermite import quintic_hermite
 from barrierjax.hinge import SolveError, normal_impact
 from barrierjax.hinge.oblique import moving_load, oblique_impact, results, transitions
 from barrierjax.hinge.oblique.phases import at_rest
+from barrierjax.hinge.response import kinetic_energy_balance
 from barrierjax.hinge.oblique.results import displacement_field, vehicle_path
 from barrierjax.hinge.oblique.transitions import initial_carry, step_loop
 
@@ -349,6 +350,24 @@ def test_float32_defaults_to_a_tolerance_it_can_meet():
         assert float(r.s1) == pytest.approx(2.0 - math.sqrt(3.0), rel=1e-4)
         with pytest.raises(ValueError, match=r"rtol must be at least 1.2e-05 in float32"):
             moving_load(2.0, 1.0, 100.0, rtol=1e-8)
+
+
+def test_a_result_whose_energy_balance_does_not_close_is_refused():
+    # A heavy vehicle in float32 (a 100 t vehicle at 27.8 m/s and 60 degrees on the default
+    # scene's barrier) left faster than it came, with no error; in float64 the same impact
+    # is refused as outside the model (the load catches up with the hinge), and with
+    # friction it closes to 5e-6 of the energy. A light vehicle's closes in float32 too.
+    heavy = (1111.66, 1.41737, 0.249144, 0.143843)
+    with jax.enable_x64(False):
+        with pytest.raises(SolveError, match=r"energy balance does not close: .* unaccounted for .*float64"):
+            oblique_impact(*heavy)
+        light = oblique_impact(25.2, 1.41737, 0.249144, 0.143843)
+        assert light.exit_speed.dtype == jnp.float32
+    with pytest.raises(SolveError, match="caught up with the hinge"):
+        oblique_impact(*heavy)
+    r = oblique_impact(*heavy, friction=0.1)
+    lost = kinetic_energy_balance(r, heavy[0], heavy[2], heavy[3])
+    assert abs(float(lost)) < 1e-5 * 0.5 * heavy[0] * (heavy[2] ** 2 + heavy[3] ** 2)
 
 
 def test_load_catching_up_with_the_hinge_is_an_error_not_a_blow_up():
