@@ -102,3 +102,12 @@ def test_bad_inputs():
         result_exit_box(bj.simulate(scene, n_history=0), 5.0, 2.0, box="ISO")
     with pytest.raises(ValueError, match="no history"):
         result_exit_box(bj.simulate(scene, n_history=0), 5.0, 2.0)
+    # A negative or NaN box judged a path (margin -4.5 m, or NaN); a negative vehicle
+    # width passed.
+    path = jnp.linspace(0.0, 10.0, 5), jnp.zeros(5)
+    boxes = ((-4.0, 10.0, "width_a"), (np.nan, 10.0, "width_a"), (4.0, 0.0, "length_b"))
+    for width, length, name in boxes:
+        with pytest.raises(ValueError, match=f"{name} must be positive and finite"):
+            exit_box_check(*path, width, length)
+    with pytest.raises(ValueError, match="vehicle_width must be positive and finite"):
+        result_exit_box(bj.simulate(scene, n_history=0), 5.0, -2.0)

@@ -108,6 +108,25 @@ def test_results_without_history_are_refused():
         assess(bj.simulate(crushing_scene(), n_history=0))
 
 
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (dict(dt=0.0), "dt must be positive and at most 0.001 s"),
+        (dict(dt=float("nan")), "dt must be positive and at most 0.001 s"),
+        (dict(dt=-1e-4), "dt must be positive and at most 0.001 s"),
+        (dict(dt=1.0), "dt must be positive and at most 0.001 s"),
+        (dict(t_end=-1.0), "t_end must be positive and finite"),
+        (dict(t_end=float("inf")), "t_end must be positive and finite"),
+    ],
+)
+def test_bad_grids_name_the_option(options, message):
+    # dt = 0 divided by zero, NaN failed converting to an integer, -1e-4 blamed the grid's
+    # own times, and t_end = -1 or dt = 1 s were judged as if fine.
+    result = bj.simulate(crushing_scene())
+    with pytest.raises(ValueError, match=message):
+        assess(result, **options)
+
+
 def test_run_reports_the_occupant_risk(capsys, tmp_path):
     import json
 

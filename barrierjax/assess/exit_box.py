@@ -17,6 +17,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
+from .. import _checks
 from . import matrices
 
 __all__ = ["ExitBoxCheck", "exit_box_check", "result_exit_box"]
@@ -36,6 +37,8 @@ def exit_box_check(along, offset, width_a, length_b) -> ExitBoxCheck:
     """Judge a path (`along` the barrier from the loss of contact and `offset` from its
     original traffic face, m, samples from the loss of contact on; at least 2) against
     a box A = `width_a` by B = `length_b` (m). Differentiable in the path and the box."""
+    width_a = _checks.positive("width_a", width_a)
+    length_b = _checks.positive("length_b", length_b)
     along, offset = jnp.asarray(along), jnp.asarray(offset)
     if along.shape != offset.shape or along.ndim != 1 or along.shape[0] < 2:
         raise ValueError(
@@ -65,6 +68,8 @@ def result_exit_box(result, vehicle_length, vehicle_width, box: str = "MASH") ->
     "CEN car" or "CEN heavy" (`matrices.EXIT_BOXES`)."""
     if box not in matrices.EXIT_BOXES:
         raise ValueError(f"box must be one of {', '.join(matrices.EXIT_BOXES)}; got {box!r}")
+    vehicle_length = _checks.positive("vehicle_length", vehicle_length)
+    vehicle_width = _checks.positive("vehicle_width", vehicle_width)
     history = result.history
     if history is None:
         raise ValueError(

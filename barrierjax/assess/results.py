@@ -43,7 +43,15 @@ def vehicle_record(history, *, dt: float = ASSESS_STEP, t_end: float | None = No
     return (t, *_vehicle_axes(*velocities, t, dt))
 
 
+# The coarsest grid step: the ridedown's 10 ms average then holds ten samples.
+_COARSEST_STEP = 1e-3
+
+
 def _grid(history, dt: float, t_end: float | None) -> np.ndarray:
+    if not 0.0 < dt <= _COARSEST_STEP:
+        raise ValueError(f"dt must be positive and at most {_COARSEST_STEP:g} s; got {dt!r}")
+    if t_end is not None and not 0.0 < t_end < math.inf:
+        raise ValueError(f"t_end must be positive and finite, s; got {t_end!r}")
     t_end = _duration(history) if t_end is None else float(t_end)
     return dt * np.arange(max(math.ceil(t_end / dt - 1e-9) + 1, 3))
 

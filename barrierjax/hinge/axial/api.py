@@ -105,7 +105,7 @@ def axial_impact(
     sizes share one compiled program; on a CPU, 2,048 scenarios or more in parts run side
     by side, one a core); `rtol` is traced, so a new tolerance does not recompile. A
     failed solve raises as in `normal_impact`, naming the stage. Needs float64 (JAX's
-    `jax_enable_x64`); a Python `0` for `axial_ratio` runs in float32 too.
+    `jax_enable_x64`) where `axial_ratio` is not a Python `0`.
     """
     if isinstance(axial_ratio, int | float) and axial_ratio == 0:
         return normal_impact(mass_ratio, force_ratio, speed, rtol=rtol, n_history=n_history)
