@@ -21,13 +21,13 @@ file in `OUT.parts/` beside a manifest of the sweep; at the end the chunks are j
 leaves its finished chunks: `resume=True` with the same sweep solves only the rest.
 """
 
+import dataclasses
 import hashlib
 import json
 import math
 import os
 import shutil
 from collections.abc import Callable
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 

@@ -176,6 +176,19 @@ def test_bad_scene_exits_2_with_one_line(capsys, tmp_path, old, new, key):
     assert "Traceback" not in err
 
 
+def test_an_out_folder_that_cannot_be_one_exits_2_before_any_work(capsys, tmp_path):
+    # A file in its place was found only when the plots were written, after the solve, as
+    # a FileExistsError's traceback.
+    taken = tmp_path / "afile"
+    taken.write_text("")
+    for command in ("run", "assess"):
+        status, out, err = run(capsys, command, str(tmp_path / "unused"), "--out", str(taken))
+        assert status == 2 and out == "", err
+        assert err.strip() == f"error: --out {taken}: not a folder"
+    status, _, err = run(capsys, "run", "--out", str(taken / "below"))
+    assert status == 2 and "cannot make or write a folder there" in err
+
+
 def test_unreadable_files_exit_2(capsys, tmp_path):
     status, out, err = run(capsys, "run", str(tmp_path / "nope.toml"))
     assert status == 2 and "no such file" in err and len(err.splitlines()) == 1

@@ -58,7 +58,14 @@ from .cantilever import (
 )
 from .figures import figures_command
 from .optimize import optimize_command
-from .output import EXIT_FAILED, EXIT_OK, EXIT_USAGE, CommandError, enable_x64
+from .output import (
+    EXIT_FAILED,
+    EXIT_OK,
+    EXIT_USAGE,
+    CommandError,
+    check_out_folder,
+    enable_x64,
+)
 from .run import STANDARD_GRAVITY, format_summary, result_dict, run_command
 from .sweep import sweep_command
 
@@ -98,7 +105,7 @@ def _add_command(commands, name, handler, *, json_help=None, out=None, **texts):
             metavar="DIR",
             help=f"folder for the {contents} (default: ./{folder})",
         )
-    parser.set_defaults(handler=handler)
+    parser.set_defaults(handler=handler, out_folder=out is not None)
     return parser
 
 
@@ -306,6 +313,8 @@ def main(argv: list[str] | None = None) -> int:
     from ..scene_file import SceneFileError
 
     try:
+        if getattr(args, "out_folder", False) and not getattr(args, "no_plots", False):
+            check_out_folder(args.out)
         with compilation_cache.keeping_programs():
             return args.handler(args)
     except SceneFileError as error:

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import sys
 import threading
+from pathlib import Path
 
 __all__ = [
     "EXIT_FAILED",
@@ -15,6 +17,7 @@ __all__ = [
     "EXIT_USAGE",
     "CommandError",
     "as_float",
+    "check_out_folder",
     "enable_x64",
     "print_result",
     "progress",
@@ -30,6 +33,18 @@ class CommandError(Exception):
     def __init__(self, message: str, status: int = EXIT_USAGE):
         super().__init__(" ".join(str(message).split()))
         self.status = status
+
+
+def check_out_folder(path: Path) -> None:
+    """`--out DIR` checked before the command's work: a folder, or one that can be made
+    where it is asked for (its first existing parent a folder this process may write)."""
+    existing = path
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if existing == path and not path.is_dir():
+        raise CommandError(f"--out {path}: not a folder")
+    if not existing.is_dir() or not os.access(existing, os.W_OK):
+        raise CommandError(f"--out {path}: cannot make or write a folder there")
 
 
 def progress(message: str) -> None:
