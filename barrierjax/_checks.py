@@ -5,6 +5,8 @@ Concrete inputs are checked eagerly and raise `ValueError`; traced inputs (insid
 value never propagates silently into NaN.
 """
 
+import math
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -37,7 +39,12 @@ def check(name: str, value, predicate, rule: str):
     if _is_traced(value):
         ok = predicate(value)
         return eqx.error_if(value, ~jnp.all(ok), f"{name} must be {rule}")
-    array = np.asarray(value, dtype=float)
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"{name} must be {rule}, a number or an array of them; got {value!r}"
+        ) from None
     with np.errstate(invalid="ignore"):
         ok = predicate(array)
     if _is_traced(ok):  # a concrete value against a traced bound
@@ -89,7 +96,12 @@ def tolerance(name: str, rtol) -> float:
 
 def history_samples(n_history, *, optional: bool = True) -> int:
     """A history's sample count: an integer >= 2, or 0 for none where `optional`."""
-    if int(n_history) != n_history or n_history < 2 and not (optional and n_history == 0):
-        rule = "0 or an integer >= 2" if optional else "an integer >= 2"
+    rule = "0 or an integer >= 2" if optional else "an integer >= 2"
+    try:
+        count = float(n_history) if not isinstance(n_history, str) else math.nan
+    except (TypeError, ValueError):
+        count = math.nan
+    whole = math.isfinite(count) and int(count) == count
+    if not whole or count < 2 and not (optional and count == 0):
         raise ValueError(f"n_history must be {rule}; got {n_history!r}")
-    return int(n_history)
+    return int(count)

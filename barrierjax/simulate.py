@@ -114,6 +114,8 @@ def simulate(
       integrated in time whatever `method` (it has no closed form), and where N reaches
       N0 the plastic-string stage (3.4.45) to rest, by `barrierjax.hinge.axial_impact`.
     """
+    if method not in ("closed_form", "ode"):  # (checked here too: not every model reads it)
+        raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
     normal = _is_normal(scene, oblique)
     if normal:
         scene = _require_normal_angle(scene)

@@ -215,6 +215,8 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
         raise SweepError(f"--chunk must be a positive integer; got {sweep.chunk}")
     if not sweep.varies:
         raise SweepError("nothing to vary: give at least one --vary KEY=LOW:HIGH")
+    if out.suffix.lower() not in (".parquet", ".csv"):
+        raise SweepError(f"--out {out}: name a .parquet or a .csv file (the rows' format)")
     keys = [v.key for v in sweep.varies]
     for key in keys:
         if keys.count(key) > 1:

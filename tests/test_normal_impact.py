@@ -275,6 +275,9 @@ def test_bad_options():
         normal_impact(1.0, 2.0, 1.0, rtol=0.0)
     with pytest.raises(ValueError, match="n_history"):
         normal_impact(1.0, 2.0, 1.0, n_history=1)
+    # A solver's name, not a solver: an AttributeError from deep inside diffrax.
+    with pytest.raises(ValueError, match="solver must be a diffrax solver"):
+        normal_impact(1.0, 2.0, 1.0, method="ode", solver="Tsit5")
 
 
 def test_bad_traced_input_fails_loudly():

@@ -62,6 +62,9 @@ def test_axial_ratio():
         (lambda: bj.Impact(1.0, angle_deg=90.5), "Impact.angle_deg"),
         (lambda: bj.Impact(1.0, friction=-0.1), "Impact.friction"),
         (lambda: bj.Impact(np.array([1.0, -1.0])), "Impact.speed"),
+        # Not a number: NumPy's conversion error named no field.
+        (lambda: bj.Barrier("105 kN*m", 34.0, 60e3), "Barrier.plastic_moment"),
+        (lambda: bj.Vehicle(1.0, {}), "Vehicle.crush_force"),
         (lambda: bj.Scene(bj.Vehicle(1.0, 1.0), bj.Vehicle(1.0, 1.0), bj.Impact(1.0)), "Scene.barrier"),
     ],
 )

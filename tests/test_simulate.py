@@ -149,6 +149,14 @@ def test_unimplemented_physics_is_refused_not_ignored():
         bj.simulate(axial)
 
 
+def test_an_unknown_method_is_refused_for_every_model():
+    # The oblique and axial models take no `method`: a misspelt one ran as if fine.
+    oblique = bj.Scene(si_scene().barrier, si_scene().vehicle, bj.Impact(11.0, 25.0))
+    for scene in (si_scene(), oblique):
+        with pytest.raises(ValueError, match="method must be 'closed_form' or 'ode'"):
+            bj.simulate(scene, method="bad")
+
+
 def test_oblique_scene_runs_the_oblique_model():
     scene = eqx.tree_at(lambda s: s.impact, si_scene(), bj.Impact(10.0, angle_deg=25.0))
     result = bj.simulate(scene, n_history=0, rtol=1e-6)

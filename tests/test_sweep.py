@@ -122,6 +122,7 @@ def test_the_distributions_draw_within_the_range():
             ["--vary", "impact.speed=1:2", "--vary", "impact.speed=3:4"],
             "--vary impact.speed: given twice",
         ),
+        (["--vary", "impact.speed=1:2", "--out", "rows.txt"], "--out rows.txt: name a .parquet"),
         # A range is put through the scene's rules at both ends before anything is drawn.
         (
             ["--vary", "impact.friction=-1:1"],

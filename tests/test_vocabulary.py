@@ -130,7 +130,7 @@ def test_simulate_and_the_cli_json_use_the_shared_names(kind):
         lambda n: oblique_impact(MU, PHI, SPEED, 0.5, n_history=n),
     ],
 )
-@pytest.mark.parametrize("n_history", [1, -2, 2.5])
+@pytest.mark.parametrize("n_history", [1, -2, 2.5, float("nan"), "20"])
 def test_the_history_keyword_is_checked_alike(call, n_history):
     with pytest.raises(ValueError, match="n_history must be 0 or an integer >= 2"):
         call(n_history)

@@ -77,13 +77,17 @@ class PhaseSolution(eqx.Module):
 
 
 def default_solver(solver=None):
-    """`solver`, or diffrax's Tsit5, the phase models' default (diffrax imported here, on
-    first use)."""
-    if solver is not None:
-        return solver
+    """`solver` (a diffrax solver, checked), or diffrax's Tsit5, the phase models' default
+    (diffrax imported here, on first use)."""
     import diffrax
 
-    return diffrax.Tsit5()
+    if solver is None:
+        return diffrax.Tsit5()
+    if not isinstance(solver, diffrax.AbstractSolver):
+        raise ValueError(
+            f"solver must be a diffrax solver, e.g. diffrax.Tsit5(); got {solver!r}"
+        )
+    return solver
 
 
 def solve_phase(
