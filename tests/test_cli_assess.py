@@ -104,6 +104,13 @@ def test_record_too_short_for_the_occupant_impact(capsys, tmp_path):
         ("t,ax,ay\n0,0,0\n1,0\n", "no value for column 'ay'"),
         ("t,ax,ay,ax\n0,0,0,0\n", "column 'ax' appears twice"),
         ("t,ax,ay\n0,0,0\n1,0,0\n", "a record needs at least 3"),
+        # Accepted before: a row with a field too many; a value that overflows in SI units
+        # (a traceback of the occupant-risk check).
+        ("t,ax,ay\n0,0,0\n1,-8.5,18.3,5\n2,0,0\n", "row 3: 4 fields under a header of 3"),
+        (
+            "t,ax [g],ay\n0,0,0\n1,1e308,0\n2,0,0\n",
+            "row 3, column 'ax': too large once in SI units",
+        ),
     ],
 )
 def test_malformed_records_name_the_column_and_the_rule(tmp_path, capsys, text, message):

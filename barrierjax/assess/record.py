@@ -172,10 +172,17 @@ def read_record(path) -> Record:
     if not rows:
         raise RecordError(f"{path}: the file holds no values")
     columns = _header(rows[0])
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) > len(rows[0]):
+            raise RecordError(f"row {line}: {len(row)} fields under a header of {len(rows[0])}")
     data = {}
     for name, (position, unit) in columns.items():
         factor = _unit_factor(name, unit)
-        data[name] = _values(rows[1:], name, position) * factor
+        with np.errstate(over="ignore"):
+            data[name] = _values(rows[1:], name, position) * factor
+        if not np.all(np.isfinite(data[name])):
+            line = int(np.argmin(np.isfinite(data[name]))) + 2
+            raise RecordError(f"row {line}, column '{name}': too large once in SI units")
     return Record(
         t=_uniform_times(data["t"]),
         ax=data["ax"],
