@@ -94,6 +94,15 @@ def tolerance(name: str, rtol) -> float:
     return float(rtol)
 
 
+def step_budget(max_steps) -> int | None:
+    """A step budget: None (the model's own), or an integer of at least 16."""
+    if max_steps is not None and (
+        isinstance(max_steps, str) or int(max_steps) != max_steps or max_steps < 16
+    ):
+        raise ValueError(f"max_steps must be None or an integer >= 16; got {max_steps!r}")
+    return None if max_steps is None else int(max_steps)
+
+
 def history_samples(n_history, *, optional: bool = True) -> int:
     """A history's sample count: an integer >= 2, or 0 for none where `optional`."""
     rule = "0 or an integer >= 2" if optional else "an integer >= 2"

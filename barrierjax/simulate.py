@@ -14,6 +14,7 @@ import numpy as np
 from jax.core import Tracer
 from jaxtyping import Array, Float
 
+from . import _checks
 from ._custom_types import Batchable
 from .compilation_cache import stored_program
 from .hinge.axial import axial_impact
@@ -114,8 +115,10 @@ def simulate(
       integrated in time whatever `method` (it has no closed form), and where N reaches
       N0 the plastic-string stage (3.4.45) to rest, by `barrierjax.hinge.axial_impact`.
     """
-    if method not in ("closed_form", "ode"):  # (checked here too: not every model reads it)
+    # (Checked here too: not every model reads them.)
+    if method not in ("closed_form", "ode"):
         raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
+    _checks.step_budget(max_steps)
     normal = _is_normal(scene, oblique)
     if normal:
         scene = _require_normal_angle(scene)

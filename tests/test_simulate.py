@@ -149,12 +149,15 @@ def test_unimplemented_physics_is_refused_not_ignored():
         bj.simulate(axial)
 
 
-def test_an_unknown_method_is_refused_for_every_model():
-    # The oblique and axial models take no `method`: a misspelt one ran as if fine.
+def test_options_a_model_does_not_read_are_checked_for_every_model():
+    # The oblique and axial models take no `method`, the normal one no step budget: a
+    # misspelt method or a budget of -5 ran as if fine.
     oblique = bj.Scene(si_scene().barrier, si_scene().vehicle, bj.Impact(11.0, 25.0))
     for scene in (si_scene(), oblique):
         with pytest.raises(ValueError, match="method must be 'closed_form' or 'ode'"):
             bj.simulate(scene, method="bad")
+        with pytest.raises(ValueError, match="max_steps must be None or an integer >= 16"):
+            bj.simulate(scene, method="ode", max_steps=-5)
 
 
 def test_oblique_scene_runs_the_oblique_model():

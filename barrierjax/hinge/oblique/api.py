@@ -63,8 +63,7 @@ def _force_ratio(force_ratio):
 def _check_options(rtol, max_steps):
     if rtol is not None:
         _checks.tolerance("rtol", rtol)
-    if max_steps is not None and (int(max_steps) != max_steps or max_steps < 16):
-        raise ValueError(f"max_steps must be None or an integer >= 16; got {max_steps!r}")
+    _checks.step_budget(max_steps)
 
 
 # The step budget a solve starts with when none is given, and the largest it grows to by
