@@ -51,6 +51,18 @@ def check(name: str, value, predicate, rule: str):
         return eqx.error_if(float_array(value), ~jnp.all(ok), f"{name} must be {rule}")
     if not np.all(ok):
         raise _fail(name, rule, value, ok)
+    dtype = jnp.result_type(float)
+    if dtype != np.float64:
+        with np.errstate(over="ignore"):
+            overflows = np.isfinite(array) & ~np.isfinite(array.astype(dtype))
+        if np.any(overflows):
+            raise _fail(
+                name,
+                f"{rule} in {np.dtype(dtype).name} (or enable float64: "
+                'jax.config.update("jax_enable_x64", True))',
+                value,
+                ~overflows,
+            )
     return float_array(value)
 
 

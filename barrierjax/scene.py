@@ -137,13 +137,15 @@ def dimensionless(scene: Scene) -> Dimensionless:
     (None without axial capacity), and the scales."""
     s = scales(scene.barrier)
     barrier, vehicle, impact = scene.barrier, scene.vehicle, scene.impact
-    # The angle is to the barrier's axis: sin and cos through the complement so that
-    # 90 degrees gives exactly zero tangential speed.
+    # The angle is to the barrier's axis: the tangential part through the complement, so
+    # that 90 degrees gives exactly zero, and the normal one through the angle, so that a
+    # small angle gives a small positive one (in float32 the complement of 1e-6 degrees
+    # rounds to 90, and its cosine to -4e-8).
     complement = jnp.deg2rad(90.0 - impact.angle_deg)
     return Dimensionless(
         mass_ratio=vehicle.mass / (barrier.mass_per_length * s.length),
         force_ratio=vehicle.crush_force / s.force,
-        normal_speed=impact.speed * jnp.cos(complement) / s.velocity,
+        normal_speed=impact.speed * jnp.sin(jnp.deg2rad(impact.angle_deg)) / s.velocity,
         tangential_speed=impact.speed * jnp.sin(complement) / s.velocity,
         axial_ratio=None if barrier.axial_capacity is None else barrier.axial_capacity / s.force,
         friction=impact.friction,

@@ -43,6 +43,22 @@ def test_angle_splits_the_speed():
     assert float(g.normal_speed) == pytest.approx(0.5 * total, rel=1e-14)
 
 
+def test_a_small_angle_gives_a_small_positive_normal_speed_in_float32():
+    # Through the complement's cosine it came out -1.3e-8, refused later as a normal speed.
+    with jax.enable_x64(False):
+        g = bj.dimensionless(scene(angle_deg=1e-6))
+        assert 0.0 < float(g.normal_speed) < 1e-7 * float(g.tangential_speed)
+        assert float(bj.dimensionless(scene(angle_deg=90.0)).tangential_speed) == 0.0
+
+
+def test_a_value_beyond_float32_is_refused_there_naming_its_field():
+    # It was checked in float64 and stored as inf: `simulate` then blamed a mass ratio of 0.
+    with jax.enable_x64(False):
+        with pytest.raises(ValueError, match=r"Barrier.plastic_moment must be .* in float32"):
+            bj.Barrier(1e39, 34.0, 60e3)
+    assert float(bj.Barrier(1e39, 34.0, 60e3).plastic_moment) == 1e39
+
+
 def test_axial_ratio():
     s = bj.Scene(bj.Barrier(1.0, 1.0, 4.0, axial_capacity=8.0), bj.Vehicle(1.0, 1.0), bj.Impact(1.0))
     assert float(bj.dimensionless(s).axial_ratio) == pytest.approx(8.0 / (4 * math.sqrt(4.0)))
