@@ -18,6 +18,13 @@ def _is_traced(value) -> bool:
     return isinstance(value, Tracer)
 
 
+# How to get float64, where a model or a value needs it. At the program's start: JAX lowers
+# the constants a function closes over in the precision of its first call, and a program
+# traced again after the switch can fail to lower.
+ENABLE_FLOAT64 = (
+    'enable float64 at the program\'s start: jax.config.update("jax_enable_x64", True)'
+)
+
 _LISTED = 8  # a message lists the values of an array up to this size, else the first bad one
 
 
@@ -58,8 +65,7 @@ def check(name: str, value, predicate, rule: str):
         if np.any(overflows):
             raise _fail(
                 name,
-                f"{rule} in {np.dtype(dtype).name} (or enable float64: "
-                'jax.config.update("jax_enable_x64", True))',
+                f"{rule} in {np.dtype(dtype).name} (or {ENABLE_FLOAT64})",
                 value,
                 ~overflows,
             )

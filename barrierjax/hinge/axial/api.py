@@ -112,7 +112,7 @@ def axial_impact(
     if jnp.result_type(float) != jnp.float64:
         raise ValueError(
             "axial_impact needs float64 (in float32 its crushing phase's steps shrink to "
-            'nothing at any rtol): jax.config.update("jax_enable_x64", True)'
+            f"nothing at any rtol): {_checks.ENABLE_FLOAT64}"
         )
     mu, phi, speed = checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history)
     eta0 = _checks.non_negative("axial_ratio", axial_ratio)

@@ -46,8 +46,7 @@ def _tolerance(rtol, dtype):
     elif rtol < smallest:
         raise ValueError(
             f"rtol must be at least {smallest:.2g} in {jnp.dtype(dtype).name}; got {rtol!r} "
-            "(pass a larger rtol, or enable float64: "
-            'jax.config.update("jax_enable_x64", True))'
+            f"(pass a larger rtol, or {_checks.ENABLE_FLOAT64})"
         )
     return _checks.float_array(rtol, dtype)
 
@@ -215,9 +214,7 @@ def _energy_closed(result: ObliqueImpact, mu, vn, vh, rtol) -> ObliqueImpact:
     bound = max(_ENERGY_FLOOR, _ENERGY_PER_RTOL * float(rtol))
     off = np.flatnonzero(~(np.abs(lost) <= bound).ravel())
     if off.size:
-        hint = "" if lost.dtype == np.float64 else (
-            '; enable float64: jax.config.update("jax_enable_x64", True)'
-        )
+        hint = "" if lost.dtype == np.float64 else f"; {_checks.ENABLE_FLOAT64}"
         reasons = {
             int(k): f"oblique_impact: the energy balance does not close: {lost.ravel()[k]:.2g} "
             f"of the impact's kinetic energy unaccounted for (the solve lost its accuracy{hint})"
