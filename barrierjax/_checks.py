@@ -112,6 +112,13 @@ def tolerance(name: str, rtol) -> float:
     return float(rtol)
 
 
+def solve_method(method: str) -> str:
+    """The normal impact's method: "closed_form" or "ode"."""
+    if method not in ("closed_form", "ode"):
+        raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
+    return method
+
+
 def step_budget(max_steps) -> int | None:
     """A step budget: None (the model's own), or an integer of at least 16."""
     if max_steps is not None and (

@@ -116,8 +116,7 @@ def simulate(
       N0 the plastic-string stage (3.4.45) to rest, by `barrierjax.hinge.axial_impact`.
     """
     # (Checked here too: not every model reads them.)
-    if method not in ("closed_form", "ode"):
-        raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
+    _checks.solve_method(method)
     _checks.step_budget(max_steps)
     normal = _is_normal(scene, oblique)
     if normal:

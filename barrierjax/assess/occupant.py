@@ -91,10 +91,6 @@ def sampling_step(t) -> float:
     return float(f"{dt:.12g}")
 
 
-def _flail_distance(name: str, value):
-    return _checks.check(name, value, lambda x: (x > 0.0) & (x < math.inf), "positive and finite")
-
-
 def record_size(n: int) -> int:
     """The length a record of `n` samples is padded to (with zeros, read as past its end):
     the first of 64, 96, 128, 192, 256, 384, ... (2^k and 3 2^(k-1)) that holds it, so
@@ -214,8 +210,8 @@ def occupant_risk(
         channels["ay"],
         channels.get("yaw_rate"),
         channels.get("az"),
-        _flail_distance("flail_x", flail_x),
-        _flail_distance("flail_y", flail_y),
+        _checks.positive("flail_x", flail_x),
+        _checks.positive("flail_y", flail_y),
         _checks.float_array(t0),
         jax.device_put(np.int32(len(t))),
         dt=dt,

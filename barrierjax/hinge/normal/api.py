@@ -117,8 +117,7 @@ def normal_impact(
     spent step budget, say) raises a `RuntimeError` naming the phase and the scenario;
     inside a caller's `jit`, `vmap` or `grad`, an error where the program runs.
     """
-    if method not in ("closed_form", "ode"):
-        raise ValueError(f"method must be 'closed_form' or 'ode'; got {method!r}")
+    _checks.solve_method(method)
     mu, phi, speed = checked_inputs(mass_ratio, force_ratio, speed, rtol, n_history)
     if not jnp.shape(mu) == jnp.shape(phi) == jnp.shape(speed):  # (else no program to run)
         mu, phi, speed = jnp.broadcast_arrays(mu, phi, speed)
