@@ -396,6 +396,22 @@ def test_energy_balance_once_friction_has_stopped_the_slide(mu):
     assert float(jnp.max(_energy_imbalance(r, mu, 3.0))) < 1e-6
 
 
+def test_a_crushing_load_that_crosses_the_trace_start_in_one_step_goes_on():
+    # A fast slide and a force ratio near 1: the load reaches S*, where the right hinge's
+    # trace starts, while the vehicle still crushes. The step that crossed S* could take
+    # the load past more of the trace's short first intervals than the next step's view
+    # holds; the next step's length was then zero for good, and rtol 1e-8 and 1e-9 spent
+    # any budget (rtol 1e-7 and 1e-10 did not).
+    mu, phi, vn, vh = 3.3273375834774193, 1.1295625195745322, 0.4916109728906413, 0.8553097921851373
+    fine = oblique_impact(mu, phi, vn, vh, rtol=1e-10)
+    s_star = 3.0 / (math.sqrt(phi**2 + 3.0) + phi)
+    assert vh * float(fine.t_star) > s_star  # (no friction: the load moves at V_H)
+    for rtol in (1e-8, 1e-9):
+        r = oblique_impact(mu, phi, vn, vh, rtol=rtol)
+        for name in ("duration", "t_star", "damage", "exit_angle_deg"):
+            assert float(getattr(r, name)) == pytest.approx(float(getattr(fine, name)), rel=1e-7)
+
+
 @pytest.mark.parametrize(
     "mu, phi, vn, vh, friction",
     [(3.6486, 3.0642, 0.36637, 0.27559, 0.0), (2.5345, 3.7609, 0.29556, 0.45929, 0.17545)],

@@ -17,7 +17,7 @@ d2psi = lambda h: -4.0 * np.sin(2.0 * h) + 2.0 / 3.0
 
 def _trace(points):
     """The right hinge's trace recorded at `points`, with Psi's exact derivatives there."""
-    recording = Recording.empty(MEMORY, 32, jnp.float64)
+    recording = Recording.empty(MEMORY, 64, jnp.float64)
     for h in points:
         sample = dict(zip(MEMORY, (h, psi(h), dpsi(h), d2psi(h))))
         recording = recording.append(sample)
@@ -27,7 +27,7 @@ def _trace(points):
 def _past(points, x, travel):
     """The view of a step that starts with the load at `x` and that the controller would
     take `travel` along the barrier, within one open segment (from the first sample on)."""
-    stage = SimpleNamespace(first=jnp.asarray(0, jnp.int32), last=jnp.asarray(32, jnp.int32))
+    stage = SimpleNamespace(first=jnp.asarray(0, jnp.int32), last=jnp.asarray(64, jnp.int32))
     y, f = SimpleNamespace(position=jnp.asarray(x)), SimpleNamespace(position=jnp.asarray(travel))
     return read_past(y, f, 1.0, stage, _trace(points))
 
@@ -66,6 +66,20 @@ def test_a_step_crossing_a_sample_reads_each_intervals_own_quintic():
     below = slope_memory(past, jnp.asarray(np.nextafter(0.5, 0.0)), 0.0)[1]
     above = slope_memory(past, jnp.asarray(0.5), 0.0)[1]
     assert float(above) == pytest.approx(float(below), abs=1e-12)
+
+
+def test_a_load_short_of_the_trace_start_passes_the_piece_by_its_own_margin():
+    # The crushing phase, the load at 0.5 ahead of S* = 1 where the trace starts, whose
+    # first intervals are short (the steps that start the solve): the piece spans the
+    # view's eight samples, to 1.0007, and the step may take the load past that by a
+    # hundredth of the piece. A hundredth of the distance from the load (1.01 times it,
+    # as within a piece) reached 1.0057, past more samples than the next step's view
+    # holds: that view lost the load, and its step length was zero for good.
+    points = [1.0 + 1e-4 * k for k in range(60)] + [2.0]
+    past = _past(points, 0.5, 0.6)
+    end = float(past.origin + past.width)
+    assert float(past.origin) == 1.0 and end == pytest.approx(1.0007, rel=1e-12)
+    assert 0.5 + float(past.room) == pytest.approx(end + 0.01 * (end - 1.0), rel=1e-12)
 
 
 def test_a_cluster_of_short_intervals_is_spanned_by_one_piece():

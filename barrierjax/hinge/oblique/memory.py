@@ -165,13 +165,20 @@ def read_past(y, f, h, stage, recording: Recording, previous: Past | None = None
 
     h_i, h_j, width, powers = piece(i, j)
     within = interior & (x < h_j)
-    room = jnp.where(within, _PAST_SAMPLE * (h_j - x), 0.5 * jnp.maximum(reach - x, 0.0))
+    # (Where the load has not reached the piece, ahead of the trace's start S*, the margin
+    # is the piece's own: as a multiple of the whole distance, the step could take the
+    # load past more of the short intervals recorded there than the next step's view
+    # holds, which then lost it, its step length zero for good.)
+    past_end = lambda end: jnp.where(
+        x >= h_i, _PAST_SAMPLE * (end - x), end - x + (_PAST_SAMPLE - 1.0) * (end - h_i)
+    )
+    room = jnp.where(within, past_end(h_j), 0.5 * jnp.maximum(reach - x, 0.0))
     # Where the step would take the load past that piece's end, the next interval's too:
     # the load crosses a sample in the step (in a moving load's steady state, every step).
     k = jnp.minimum(j + 1, jnp.minimum(last, start + _WINDOW - 1))
     _, h_k, width_next, powers_next = piece(j, k)
     crossing = within & (k > j) & (room < travel)
-    room = jnp.where(crossing, _PAST_SAMPLE * (h_k - x), room)
+    room = jnp.where(crossing, past_end(h_k), room)
     return Past(
         origin=h_i,
         width=width,
