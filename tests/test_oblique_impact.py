@@ -396,6 +396,24 @@ def test_energy_balance_once_friction_has_stopped_the_slide(mu):
     assert float(jnp.max(_energy_imbalance(r, mu, 3.0))) < 1e-6
 
 
+def test_a_step_bounded_to_zero_ends_the_solve_and_says_so(monkeypatch):
+    # A step that `max_step` bounds to length zero never recovers (the controller grows the
+    # last length): the solve ends there and says so, where it spent every budget up to
+    # 65,536 steps and then asked for a larger one (the stall below).
+    bounded = transitions.max_step
+    stuck = lambda y, f, stage, past, p: jnp.where(y.time > 0.5, 0.0, bounded(y, f, stage, past, p))
+    monkeypatch.setattr(transitions, "max_step", stuck)
+    jax.clear_caches()  # (read where the program is traced)
+    try:
+        with pytest.raises(SolveError, match=r"T = 0\.5.*the step length is no longer positive"):
+            oblique_impact(5.0, 2.0, 0.3, 0.5)
+        with pytest.raises(Exception, match="the step length is no longer positive"):
+            jax.block_until_ready(jax.jit(lambda m: oblique_impact(m, 2.0, 0.3, 0.5).damage)(5.0))
+    finally:
+        monkeypatch.undo()
+        jax.clear_caches()
+
+
 def test_a_crushing_load_that_crosses_the_trace_start_in_one_step_goes_on():
     # A fast slide and a force ratio near 1: the load reaches S*, where the right hinge's
     # trace starts, while the vehicle still crushes. The step that crossed S* could take

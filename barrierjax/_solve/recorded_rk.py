@@ -250,7 +250,10 @@ def _locate(event, start, end, e_start, e_end, length):
 # kernels, and each added about 40 s to the compilation of a batch.
 _NEWTON_ITERATIONS = 4
 
-_STEP, _START, _DONE = 0, 1, 2
+# A solve that is running steps or starts a stage; one that ended, by its last stage or
+# stalled: a step bounded to length zero, from which the controller, growing the last
+# length, never recovers.
+_STEP, _START, _DONE, _STALLED = 0, 1, 2, 3
 
 
 def _tied(tree, inputs):
@@ -276,6 +279,7 @@ class Solution(eqx.Module):
     recording: Recording
     args: PyTree
     complete: Bool[Array, ""]  # every stage ended within the step budget
+    stalled: Bool[Array, ""]  # a step's length fell to zero (`_STALLED`)
 
 
 class Carry(eqx.Module):
@@ -316,6 +320,8 @@ class RecordedRK(eqx.Module):
     never read past what `past` holds. `args` are the solve's constants. The budget
     `max_steps` counts every iteration; spending it is flagged (`Solution.complete`), not
     raised: the caller decides (under `vmap`, for example, which members' failures count).
+    So is a stall (`Solution.stalled`): a step that `max_step` or the controller leaves
+    with length zero ends the solve, where it would spend any budget in place.
 
     `batched` picks how a step is written (`step`): for a loop that runs under `vmap`,
     where it runs fastest, or for a single solve, where it compiles fastest.
@@ -370,11 +376,17 @@ class RecordedRK(eqx.Module):
         return self.solution(carry)
 
     def running(self, carry: Carry):
-        return (carry.mode != _DONE) & (carry.iterations < self.max_steps)
+        return (carry.mode < _DONE) & (carry.iterations < self.max_steps)
 
     def solution(self, carry: Carry) -> Solution:
         return Solution(
-            carry.y, carry.f, carry.stage, carry.recording, carry.args, carry.mode == _DONE
+            carry.y,
+            carry.f,
+            carry.stage,
+            carry.recording,
+            carry.args,
+            carry.mode == _DONE,
+            carry.mode == _STALLED,
         )
 
     def step(self, carry: Carry) -> Carry:
@@ -436,6 +448,7 @@ class RecordedRK(eqx.Module):
         mode = jnp.where(
             ended, jnp.where(done, _DONE, _START), jnp.where(accept, _STEP, carry.mode)
         )
+        mode = jnp.where(stepping & ~(h_try > 0.0), _STALLED, mode)
         return Carry(
             y=keep(keep(y_next, y_reached, ended), carry.y, accept),
             f=keep(f_reached, carry.f, accept),

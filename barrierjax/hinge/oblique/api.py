@@ -21,6 +21,7 @@ from ..response import RESULT_UNITS, kinetic_energy_balance
 from .results import MovingLoad, ObliqueImpact, build_history, finish, rigid_barrier
 from .transitions import (
     OVERTAKEN_MESSAGE,
+    STALLED_MESSAGE,
     Outcome,
     initial_carry,
     outcome_of,
@@ -90,6 +91,15 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
         if overtaken.size:
             reasons = {int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in overtaken}
             raise SolveError.of(reasons, _batch_size(outcome))
+        phases, times = np.asarray(outcome.phase).ravel(), np.asarray(outcome.time).ravel()
+        stalled = np.flatnonzero(np.asarray(outcome.stalled).ravel())
+        if stalled.size:
+            reasons = {
+                int(k): f"{name}: in {phase_name(int(phases[k]), moving_load)} at "
+                f"T = {times[k]:.4g}, {STALLED_MESSAGE}"
+                for k in stalled
+            }
+            raise SolveError.of(reasons, _batch_size(outcome))
         spent = ~np.asarray(outcome.complete).ravel()
         if not spent.any():
             return result
@@ -97,7 +107,6 @@ def _within_budget(solve, max_steps, larger, *, moving_load=False):
         if max_steps is None and suggestion <= _LARGEST_BUDGET:
             budget = suggestion
             continue
-        phases, times = np.asarray(outcome.phase).ravel(), np.asarray(outcome.time).ravel()
         reasons = {
             int(k): f"{name}: the step budget max_steps={budget} was spent in "
             f"{phase_name(int(phases[k]), moving_load)} at T = {times[k]:.4g}: "

@@ -275,19 +275,30 @@ def initial_carry(loop: RecordedRK, mu, phi, vn, vh, friction, *, history, t_end
 
 class Outcome(eqx.Module):
     """How a solve ended, for `raise_failures` and `failure_message`: whether it completed,
-    the phase it was in, whether the load overtook the hinge ahead, and the time reached."""
+    the phase it was in, whether the load overtook the hinge ahead, whether its step
+    length fell to zero, and the time reached."""
 
     complete: Bool[Array, ""]
     phase: Int[Array, ""]
     overtaken: Bool[Array, ""]
     time: Scalar
+    stalled: Bool[Array, ""]
 
 
 def outcome_of(solution: Solution) -> Outcome:
     return Outcome(
-        solution.complete, solution.stage.phase, solution.stage.overtaken, solution.y.time
+        solution.complete,
+        solution.stage.phase,
+        solution.stage.overtaken,
+        solution.y.time,
+        solution.stalled,
     )
 
+
+STALLED_MESSAGE = (
+    "the step length is no longer positive: the solver cannot advance (a failure of the "
+    "step loop, not of the step budget; another rtol may pass)"
+)
 
 OVERTAKEN_MESSAGE = (
     "the load caught up with the hinge ahead of it (S1 -> 0) in the contact phase: the "
@@ -309,8 +320,9 @@ def raise_failures(value, outcome: Outcome, moving_load=False):
     for phase in (CRUSHING, CONTACT, FREE):
         value = eqx.error_if(
             value,
-            ~outcome.complete & (outcome.phase == phase),
+            ~outcome.complete & ~outcome.stalled & (outcome.phase == phase),
             f"{phase_name(phase, moving_load)}: the step budget was spent before the phase "
             "ended: pass a larger max_steps (twice the last, say)",
         )
+    value = eqx.error_if(value, outcome.stalled, STALLED_MESSAGE)
     return eqx.error_if(value, outcome.overtaken, OVERTAKEN_MESSAGE)
