@@ -299,8 +299,9 @@ def test_bad_inputs(field, bad):
 def test_bad_pulse_and_history():
     with pytest.raises(ValueError, match="pulse_duration"):
         parkes_cantilever(M, V0, pulse_duration=-1e-3, **BEAM)
-    with pytest.raises(ValueError, match="n_history"):
-        parkes_cantilever(M, V0, n_history=1, **BEAM)
+    for n_history in (1, 2.5, float("nan"), "8"):
+        with pytest.raises(ValueError, match="n_history must be an integer >= 2"):
+            parkes_cantilever(M, V0, n_history=n_history, **BEAM)
 
 
 def test_finite_elements_approach_parkes_as_the_beam_stiffens():

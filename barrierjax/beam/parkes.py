@@ -200,8 +200,7 @@ def parkes_cantilever(
     respect to any of them work (at tau = 0 the derivative with respect to tau is
     infinite: u0 grows like sqrt(tau)).
     """
-    if int(n_history) < 2:
-        raise ValueError(f"n_history must be at least 2; got {n_history!r}")
+    n_history = _checks.history_samples(n_history, optional=False)
     return _parkes(
         _checks.positive("tip_mass", tip_mass),
         _checks.positive("speed", speed),
@@ -209,7 +208,7 @@ def parkes_cantilever(
         _checks.positive("mass_per_length", mass_per_length),
         _checks.positive("length", length),
         _checks.non_negative("pulse_duration", pulse_duration),
-        int(n_history),
+        n_history,
     )
 
 
