@@ -92,9 +92,11 @@ def test_records_of_nearby_lengths_share_a_program_and_read_as_unpadded(compilat
     assert sum("_records" in m for m in programs) == 2, programs  # one program an edition
     assert bool(risks["within", "2010"].impact_in_record)
     assert not bool(risks["after", "2010"].impact_in_record)
+    # (The unpadded reference as one program, not an operation at a time.)
+    unpadded_record = jax.jit(_one_record, static_argnames=("dt", "edition"))
     for (name, edition), risk in risks.items():
         t, *channels = within if name == "within" else after
-        unpadded = _one_record(
+        unpadded = unpadded_record(
             *map(jnp.asarray, channels), 0.6, 0.3, 0.0, jnp.int32(t.size), dt=DT, edition=edition
         )
         for field in risk.__dataclass_fields__:
