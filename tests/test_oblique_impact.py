@@ -35,8 +35,8 @@ def traced_apart():
     """Within it, programs are traced and compiled anew (a module patched in the block is
     read), and those traced before it are used again after it: the jit caches and the
     traces key on the trace context, here an offset of the random seeds of the block's
-    own. (`jax.clear_caches()` did the same, and every later test compiled anew all it
-    ran: 12 s more for this file alone.)"""
+    own. (`jax.clear_caches()` did the same, and every later test compiled anew what it
+    ran: this file alone took 4.6 s longer, 97.1 s of tests against 92.5.)"""
     before = jax.config.jax_random_seed_offset
     jax.config.update("jax_random_seed_offset", next(_TRACE_CONTEXTS))
     try:
