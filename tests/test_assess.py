@@ -10,7 +10,7 @@ import pytest
 import reference_occupant_risk as reference
 import scipy.signal
 
-from barrierjax.assess import filters, judge, occupant_risk
+from barrierjax.assess import filters, judge, occupant_risk, signals
 from barrierjax.assess.matrices import G
 
 DT = 1e-4  # 10 kHz, as crash-test records are sampled
@@ -103,6 +103,20 @@ def test_records_of_nearby_lengths_share_a_program_and_read_as_unpadded(compilat
             np.testing.assert_allclose(
                 getattr(risk, field), getattr(unpadded, field), rtol=1e-10, err_msg=field
             )
+
+
+@pytest.mark.parametrize("end", [None, 30e-3, 12.5e-3, 49e-3, 0.0, 60e-3])
+def test_the_integral_on_the_sample_grid_is_the_integral_at_each_time(end):
+    # The ridedown's windows and the 1998 ASI's average read the cumulative integral at a
+    # fixed offset from every sample, by shifting it: the same as locating each time, on
+    # and between samples, before the record and past its end (`end`: a sample, between
+    # two, its start, beyond its last).
+    a = jnp.asarray(np.random.default_rng(2).normal(size=50))
+    dt = 1e-3
+    at = jax.jit(lambda t: signals.integral_at(a, dt, end)(t))
+    for shift in (0.0, 0.01, 0.0105, 0.001, 0.0004, -0.0004, -0.025, 0.049, 0.0491, 0.2, -0.2):
+        on_grid = signals.integral_on_grid(a, dt, shift, end)
+        np.testing.assert_allclose(on_grid, at(jnp.arange(50.0) * dt + shift), rtol=0, atol=1e-15)
 
 
 def test_lateral_constant_acceleration_reaches_the_side_first():

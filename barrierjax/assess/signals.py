@@ -13,6 +13,8 @@ end (so that records of nearby lengths share one compiled program) is read throu
 `end` (the last real sample's time) and `continued` past it.
 """
 
+import math
+
 import jax
 import jax.numpy as jnp
 
@@ -24,6 +26,7 @@ __all__ = [
     "first_impact",
     "hermite_at",
     "integral_at",
+    "integral_on_grid",
     "max_window_mean",
     "safe_norm",
 ]
@@ -58,6 +61,39 @@ def integral_at(a, dt, end=None):
         return jnp.where(tau <= 0.0, 0.0, inside)
 
     return integral
+
+
+def _shifted(x, m: int):
+    """y[k] = x[k + m] where that is a sample of `x` (its first axis), 0 elsewhere: a pad
+    and a slice (the shift is static), no gather."""
+    n = x.shape[0]
+    padded = jnp.pad(x, [(max(0, -m), max(0, m))] + [(0, 0)] * (x.ndim - 1))
+    return padded[max(0, m) : max(0, m) + n]
+
+
+def integral_on_grid(a, dt, shift: float, end=None):
+    """`integral_at(a, dt, end)` at every sample's time plus `shift` (s, a Python number):
+    the cumulative integral read at a fixed offset from each sample, by shifting it rather
+    than locating each time in the record, a gather a time (the ridedown's windows and the
+    1998 ASI's average: a batch of records 12 % faster in the 2010 edition and 42 % in the
+    1998, the robust sizing's crash tests and their derivatives a third faster;
+    benchmarks/README.md, "Thirtieth pass")."""
+    n = a.shape[0]
+    v, _ = cumulative_integrals(a, dt)
+    samples = shift / dt
+    on_sample = abs(samples - round(samples)) < 1e-9  # (0.01 / 1e-4 is 100 to rounding)
+    whole = round(samples) if on_sample else math.floor(samples)
+    s = 0.0 if on_sample else shift - whole * dt  # into the sample interval, [0, dt)
+    # (Only the times within the record, 0 < t < stop, are read from the shifted samples:
+    # their interval [k + whole, k + whole + 1] then lies in it.)
+    v0 = _shifted(v, whole)
+    if s > 0.0:
+        a0 = _shifted(a, whole)
+        v0 = v0 + a0 * s + 0.5 * (_shifted(a, whole + 1) - a0) * s**2 / dt
+    t = jnp.arange(n, dtype=a.dtype) * dt + shift
+    stop = (n - 1) * dt if end is None else jnp.minimum(end, (n - 1) * dt)
+    after = jnp.where(t >= stop, integral_at(a, dt, end)(jnp.asarray(stop, a.dtype)), v0)
+    return jnp.where(t <= 0.0, 0.0, after)
 
 
 def hermite_at(position, velocity, dt):
@@ -172,11 +208,13 @@ def max_window_mean(a, dt, window: float, t_from, end=None):
     at `end`: `integral_at`); 0 when `t_from` is +inf. The mean over a window starting at
     `t_from` makes it continuous and differentiable in `t_from`."""
     integral = integral_at(a, dt, end)
-    finite_from = jnp.where(jnp.isfinite(t_from), t_from, 0.0)
-    starts = jnp.concatenate([jnp.arange(a.shape[0], dtype=a.dtype) * dt, finite_from[None]])
-    means = jnp.abs(integral(starts + window) - integral(starts)) / window
-    after = (starts >= finite_from) & jnp.isfinite(t_from)
-    return jnp.max(jnp.where(after, means, 0.0))
+    finite = jnp.isfinite(t_from)
+    finite_from = jnp.where(finite, t_from, 0.0)
+    at_samples = integral_on_grid(a, dt, window, end) - integral_on_grid(a, dt, 0.0, end)
+    at_from = integral(finite_from + window) - integral(finite_from)
+    after = (jnp.arange(a.shape[0], dtype=a.dtype) * dt >= finite_from) & finite
+    from_samples = jnp.max(jnp.abs(jnp.where(after, at_samples, 0.0)))
+    return jnp.maximum(from_samples, jnp.abs(jnp.where(finite, at_from, 0.0))) / window
 
 
 def safe_norm(x, axis=-1):
