@@ -4,17 +4,24 @@ ASI history. `write_assessment_plots` writes the three as PNG files."""
 
 from pathlib import Path
 
+import jax
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from .asi import asi_history, conditioned_accelerations
-from .flail import FLAIL_X, FLAIL_Y, occupant_motion
+from . import asi, flail
+from .flail import FLAIL_X, FLAIL_Y
 from .matrices import G
 
 __all__ = ["accelerations_figure", "asi_figure", "flail_space_figure", "write_assessment_plots"]
 
 _MS = 1e3
+
+# The curves drawn, each one program (run operation by operation, they were some fifty
+# small programs to compile in each new process).
+_conditioned = jax.jit(asi.conditioned_accelerations, static_argnames=("dt", "edition"))
+_occupant_motion = jax.jit(flail.occupant_motion, static_argnames="dt")
+_asi_history = jax.jit(asi.asi_history, static_argnames=("dt", "edition"))
 
 
 def accelerations_figure(record, risk, asi_edition: str = "2010") -> Figure:
@@ -24,7 +31,7 @@ def accelerations_figure(record, risk, asi_edition: str = "2010") -> Figure:
     if record.az is not None:
         channels["az"] = record.az
     stacked = np.stack(list(channels.values()))
-    smoothed = np.asarray(conditioned_accelerations(stacked, record.dt, asi_edition))
+    smoothed = np.asarray(_conditioned(stacked, dt=record.dt, edition=asi_edition))
     fig = Figure(figsize=(8, 4.5), layout="constrained")
     ax = fig.add_subplot()
     for (name, values), smooth, color in zip(channels.items(), smoothed, ("C0", "C1", "C2")):
@@ -47,7 +54,7 @@ def accelerations_figure(record, risk, asi_edition: str = "2010") -> Figure:
 
 def flail_space_figure(record, risk) -> Figure:
     """The occupant's path relative to the vehicle in plan, inside the flail space."""
-    position, _ = occupant_motion(np.asarray(record.ax), np.asarray(record.ay), record.dt)
+    position, _ = _occupant_motion(np.asarray(record.ax), np.asarray(record.ay), dt=record.dt)
     position = np.asarray(position)
     t_impact = float(risk.t_impact)
     before = record.t <= t_impact
@@ -80,7 +87,9 @@ def flail_space_figure(record, risk) -> Figure:
 
 def asi_figure(record, risk, asi_edition: str = "2010") -> Figure:
     """ASI(t), its maximum and the EN 1317-2 class bounds."""
-    history = np.asarray(asi_history(record.ax, record.ay, record.az, record.dt, asi_edition))
+    history = np.asarray(
+        _asi_history(record.ax, record.ay, record.az, dt=record.dt, edition=asi_edition)
+    )
     fig = Figure(figsize=(8, 4), layout="constrained")
     ax = fig.add_subplot()
     ax.plot(record.t * _MS, history, color="C0", label=f"ASI(t), EN 1317-1:{asi_edition}")
