@@ -224,3 +224,23 @@ def test_critical_impact_point_sweep_equals_single_runs_and_picks_the_largest():
         critical_impact_point(_car(), rail, jnp.asarray([-1.0]), **options)
     with pytest.raises(ValueError, match="criterion"):
         critical_impact_point(_car(), rail, points, criterion="nope", **options)
+
+
+def test_the_plan_view_animation_moves_the_vehicle_along_its_path(tmp_path):
+    # (The run of `test_stable_steps_that_differ_run_one_program`: its compiled program.)
+    from PIL import Image, ImageSequence
+
+    from barrierjax.system.plots import animate_plan_view
+
+    car, rail = _car(), _rail()
+    r = system.system_impact(car, rail, speed=25.0, angle_deg=25.0, impact_point=8.0,
+                             duration=0.1, save_every=20)  # fmt: skip
+    path = animate_plan_view(r, car, rail, tmp_path / "plan.gif", frames=6)
+    with Image.open(path) as gif:
+        frames = [np.asarray(f.convert("RGB"), dtype=float) for f in ImageSequence.Iterator(gif)]
+    assert len(frames) == 6 and all(f.shape == frames[0].shape for f in frames)
+    # The vehicle's outline (red) in every frame, moving along the barrier (+x, rightwards).
+    red = [np.nonzero((f[..., 0] > 150) & (f[..., 1] < 100) & (f[..., 2] < 100))[1] for f in frames]
+    assert all(columns.size > 50 for columns in red)
+    centres = [float(np.mean(columns)) for columns in red]
+    assert centres == sorted(centres) and centres[-1] - centres[0] > 20

@@ -26,17 +26,27 @@ def _rail_x(barrier):
     return np.asarray(barrier.rail.coords[:, 0]) if isinstance(barrier, Guardrail) else None
 
 
-def _draw_plan(ax, result, vehicle, barrier, k, *, faded=False):
+def _plan(result, vehicle, barrier, k) -> list:
+    """The plan view's lines at history sample `k`, (x, y) each: the rail and its posts (a
+    guardrail's), then the vehicle's outline."""
     h = result.history
-    alpha = 0.35 if faded else 1.0
+    lines = []
     x = _rail_x(barrier)
     if x is not None:
-        ax.plot(x, np.asarray(h.rail_deflection[k]), color="tab:blue", alpha=alpha, lw=1.5)
+        rail = np.asarray(h.rail_deflection[k])
         posts = np.asarray(barrier.post_nodes)
-        ax.plot(x[posts], np.asarray(h.rail_deflection[k])[posts], "s", ms=3, color="0.3",
-                alpha=alpha)  # fmt: skip
+        lines += [(x, rail), (x[posts], rail[posts])]
     outline = _outline(vehicle, h.position[k], float(h.yaw[k]))
-    ax.plot(outline[:, 0], outline[:, 1], color="tab:red", alpha=alpha, lw=1.2)
+    return lines + [(outline[:, 0], outline[:, 1])]
+
+
+def _draw_plan(ax, result, vehicle, barrier, k, *, faded=False) -> list:
+    """The plan view at history sample `k` drawn on `ax`: its lines (`_plan`'s order)."""
+    alpha = 0.35 if faded else 1.0
+    *rail, body = _plan(result, vehicle, barrier, k)
+    styles = [dict(color="tab:blue", lw=1.5), dict(marker="s", ls="", ms=3, color="0.3")]
+    drawn = [ax.plot(*xy, alpha=alpha, **style)[0] for xy, style in zip(rail, styles)]
+    return drawn + ax.plot(*body, color="tab:red", alpha=alpha, lw=1.2)
 
 
 def plan_view_figure(result: SystemResult, vehicle: Vehicle, barrier, *, snapshots=6,
@@ -121,14 +131,22 @@ def animate_plan_view(result: SystemResult, vehicle: Vehicle, barrier, path, *, 
     left = positions[:, 0].min() - 4.0
     right = positions[:, 0].max() + 4.0
 
-    def draw(i):
-        ax.clear()
-        _draw_plan(ax, result, vehicle, barrier, picks[i])
-        ax.set_xlim(left, right)
-        ax.set_ylim(low, high)
-        ax.set_aspect("equal")
-        ax.set_title((title + ": " if title else "") + f"{float(h.time[picks[i]]) * 1e3:.0f} ms")
+    ax.set_xlim(left, right)
+    ax.set_ylim(low, high)
+    ax.set_aspect("equal")
+    lines = _draw_plan(ax, result, vehicle, barrier, picks[0])
+    times = np.asarray(h.time)
 
+    def draw(i):
+        # (The lines' data set anew, not the axes cleared and drawn again: the axes, their
+        # ticks and the layout stay as the first frame laid them out.)
+        for line, xy in zip(lines, _plan(result, vehicle, barrier, picks[i])):
+            line.set_data(*xy)
+        ax.set_title((title + ": " if title else "") + f"{times[picks[i]] * 1e3:.0f} ms")
+
+    draw(0)
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
     animation = FuncAnimation(fig, draw, frames=len(picks))
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
