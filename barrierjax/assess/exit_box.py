@@ -14,6 +14,7 @@ with the point.
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
@@ -44,6 +45,13 @@ def exit_box_check(along, offset, width_a, length_b) -> ExitBoxCheck:
         raise ValueError(
             f"along and offset must be 1-D paths of the same length >= 2; got {along.shape}, {offset.shape}"
         )
+    return _judged(along, offset, width_a, length_b)
+
+
+@jax.jit
+def _judged(along, offset, width_a, length_b) -> ExitBoxCheck:
+    """`exit_box_check`'s judgement: one program (operation by operation, some twenty small
+    programs to compile in each new process)."""
     travelled = along - along[0]
     # The path is judged up to where it first passes B, and at B itself: linear between
     # the samples either side (the sample before it alone under-reads a rising path by up
