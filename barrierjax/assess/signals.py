@@ -53,7 +53,11 @@ def integral_at(a, dt, end=None):
     """The function tau -> integral of `a` from the first sample to `tau` (s after it), with
     a = 0 outside the record, which ends at `end` (s; default its last sample).
     Differentiable in `a` and `tau`."""
-    v, _ = cumulative_integrals(a, dt)
+    return _integral(a, cumulative_integrals(a, dt)[0], dt, end)
+
+
+def _integral(a, v, dt, end):
+    """`integral_at`'s function, given `a`'s integral at the samples `v`."""
 
     def integral(tau):
         i, s = _interval(tau if end is None else jnp.minimum(tau, end), dt, a.shape[0])
@@ -92,7 +96,7 @@ def integral_on_grid(a, dt, shift: float, end=None):
         v0 = v0 + a0 * s + 0.5 * (_shifted(a, whole + 1) - a0) * s**2 / dt
     t = jnp.arange(n, dtype=a.dtype) * dt + shift
     stop = (n - 1) * dt if end is None else jnp.minimum(end, (n - 1) * dt)
-    after = jnp.where(t >= stop, integral_at(a, dt, end)(jnp.asarray(stop, a.dtype)), v0)
+    after = jnp.where(t >= stop, _integral(a, v, dt, end)(jnp.asarray(stop, a.dtype)), v0)
     return jnp.where(t <= 0.0, 0.0, after)
 
 
