@@ -2,6 +2,8 @@
 the independent numpy reference (tests/reference_occupant_risk.py, written from the
 standards' text, sharing no code)."""
 
+import math
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -117,6 +119,21 @@ def test_the_integral_on_the_sample_grid_is_the_integral_at_each_time(end):
     for shift in (0.0, 0.01, 0.0105, 0.001, 0.0004, -0.0004, -0.025, 0.049, 0.0491, 0.2, -0.2):
         on_grid = signals.integral_on_grid(a, dt, shift, end)
         np.testing.assert_allclose(on_grid, at(jnp.arange(50.0) * dt + shift), rtol=0, atol=1e-15)
+
+
+def test_the_integral_on_the_sample_grid_has_the_gradient_of_the_integral_at_each_time():
+    a = jnp.asarray(np.random.default_rng(3).normal(size=50))
+    weights = jnp.asarray(np.random.default_rng(4).normal(size=50))
+    t = jnp.arange(50.0) * 1e-3 + 0.0105
+    on_grid = jax.grad(lambda a: weights @ signals.integral_on_grid(a, 1e-3, 0.0105, 0.03))(a)
+    at = jax.grad(lambda a: weights @ signals.integral_at(a, 1e-3, 0.03)(t))(a)
+    np.testing.assert_allclose(on_grid, at, rtol=1e-12, atol=1e-18)
+
+
+@pytest.mark.parametrize("shift", [math.nan, math.inf, jnp.asarray(0.01), "0.01"])
+def test_the_integral_on_the_sample_grid_refuses_a_shift_not_a_finite_number(shift):
+    with pytest.raises(ValueError, match="shift must be a finite Python number"):
+        signals.integral_on_grid(jnp.zeros(8), 1e-3, shift)
 
 
 def test_lateral_constant_acceleration_reaches_the_side_first():

@@ -82,6 +82,8 @@ def integral_on_grid(a, dt, shift: float, end=None):
     1998 ASI's average: a batch of records 12 % faster in the 2010 edition and 42 % in the
     1998, the robust sizing's crash tests and their derivatives a third faster;
     benchmarks/README.md, "Thirtieth pass")."""
+    if not isinstance(shift, (int, float)) or not math.isfinite(shift):
+        raise ValueError(f"shift must be a finite Python number (s); got {shift!r}")
     n = a.shape[0]
     v, _ = cumulative_integrals(a, dt)
     samples = shift / dt
