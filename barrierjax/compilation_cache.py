@@ -181,6 +181,7 @@ def _load(key):
     import jax
     from jax.experimental import serialize_executable
 
+    _lapack_ready()
     try:
         payload, inputs, outputs = pickle.loads((_programs / key).read_bytes())
         # The trees are rebuilt here from skeletons (their leaves numbered): a pickled
@@ -194,6 +195,17 @@ def _load(key):
         return executable, outputs
     except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError, RuntimeError):
         return None
+
+
+@functools.cache
+def _lapack_ready():
+    """Point XLA's LAPACK calls (an LU factorisation, say) at their routines. JAX does it as
+    it lowers such an operation, which a process that loads a stored program never does:
+    its executable would call through an unset pointer (a segmentation fault)."""
+    import numpy as np
+    from jaxlib import lapack
+
+    lapack.prepare_lapack_call("getrf_ffi", np.float64)
 
 
 def _compile_and_store(jitted, key, args, static, compiler_options):

@@ -104,6 +104,31 @@ def test_a_stored_program_is_loaded_by_the_next_process_without_tracing(tmp_path
     assert len(list((tmp_path / "cache" / "programs").iterdir())) == 2
 
 
+# A stored program that factorises (LAPACK's LU through XLA): JAX points those calls at
+# their routines as it lowers a program, which a process loading the program never does.
+_SOLVING_PROGRAM = """
+import jax, jax.numpy as jnp
+jax.config.update("jax_enable_x64", True)
+from barrierjax import compilation_cache
+
+@compilation_cache.stored_program
+@jax.jit
+def solve(a, b):
+    return jnp.linalg.solve(a, b)
+
+with compilation_cache.keeping_programs():
+    x = solve(jnp.array([[4.0, 1.0], [2.0, 3.0]]), jnp.array([1.0, 2.0]))
+print(*x.tolist())
+"""
+
+
+def test_a_stored_program_that_factorises_runs_in_the_next_process(tmp_path):
+    first = _run(_SOLVING_PROGRAM, tmp_path / "cache")
+    assert [float(v) for v in first] == pytest.approx([0.1, 0.6], rel=1e-14)
+    assert len(list((tmp_path / "cache" / "programs").iterdir())) == 1
+    assert _run(_SOLVING_PROGRAM, tmp_path / "cache") == first  # loaded, not traced
+
+
 def test_a_damaged_stored_program_is_compiled_again(tmp_path):
     _run(_TRACED_PROGRAM, tmp_path / "cache")
     (stored,) = (tmp_path / "cache" / "programs").iterdir()

@@ -41,6 +41,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
+from ..compilation_cache import stored_program
 from ..materials.overstress import CowperSymonds
 from ..materials.plasticity import RateIndependentPlasticity
 from .integrate import SCHEME_PARAMETERS, BeamHistory, integrate, step_sizes
@@ -230,17 +231,23 @@ def report_example(
     dts = step_sizes(t_end, dt, pulse=min(data["duration"], float(t_end)), pulse_steps=pulse_steps)
     history = _run(
         model,
-        jnp.asarray(dts),
-        scheme,
-        _scheme_substeps(scheme, float(dt), substeps, data, n_elements),
-        int(iterations),
+        dts=tuple(float(d) for d in dts),
+        scheme=scheme,
+        substeps=_scheme_substeps(scheme, float(dt), substeps, data, n_elements),
+        iterations=int(iterations),
     )
     return cantilever_result(model, history)
 
 
+@stored_program
 @eqx.filter_jit
-def _run(model, dts, scheme, substeps, iterations):
-    return integrate(model, dts, scheme=scheme, substeps=substeps, iterations=iterations)
+def _run(model, *, dts, scheme, substeps, iterations):
+    """The run, its steps `dts` (a tuple) constants of the program: checked as it is traced,
+    so that it holds no run-time check (a host callback), which neither the persistent
+    cache nor `stored_program` can keep, and a later process loads it."""
+    return integrate(
+        model, np.asarray(dts), scheme=scheme, substeps=substeps, iterations=iterations
+    )
 
 
 class TipRest(NamedTuple):
