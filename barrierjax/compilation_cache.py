@@ -42,7 +42,7 @@ import warnings
 from importlib import metadata
 from pathlib import Path
 
-__all__ = ["cache_dir", "enable", "keeping_programs", "stored_program"]
+__all__ = ["cache_dir", "enable", "keeping_programs", "run_compiled", "stored_program"]
 
 _OFF = {"off", "0", "false", "no", ""}
 
@@ -107,28 +107,45 @@ def stored_program(jitted, *, compiler_options: dict | None = None):
 
     @functools.wraps(jitted)
     def call(*args, **static):
-        import jax
-
-        concrete = all(
-            isinstance(a, jax.Array) and not isinstance(a, jax.core.Tracer)
-            for a in jax.tree.leaves(args)
-        )
-        if _programs is None or not concrete:
-            return jitted(*args, **static)
-        key = _key(jitted, args, static, compiler_options)
-        if key is None:
-            return jitted(*args, **static)
-        with _loading:
-            stored = (
-                _loaded.get(key)
-                or _load(key)
-                or _compile_and_store(jitted, key, args, static, compiler_options)
-            )
-            _loaded[key] = stored
-        executable, outputs = stored
-        return jax.tree.unflatten(outputs, executable(*args))
+        stored = _stored(jitted, args, static, compiler_options)
+        return jitted(*args, **static) if stored is None else stored(*args)
 
     return call
+
+
+def run_compiled(jitted, *args):
+    """`jitted` (a `jax.jit` function) run now on `args`, concrete data, as a compiled
+    program: its result is concrete even inside a caller's `jit`. Within
+    `keeping_programs()` the executable is `stored_program`'s (no tracing in a later
+    process), else it is compiled ahead of time here."""
+    stored = _stored(jitted, args, {}, None)
+    return jitted.lower(*args).compile()(*args) if stored is None else stored(*args)
+
+
+def _stored(jitted, args, static, compiler_options):
+    """The stored program of `jitted` at `args` and `static` as a function of the positional
+    arguments (loaded, or compiled and stored), or None where nothing is kept (outside
+    `keeping_programs()`, traced arguments, a key with no stable text)."""
+    import jax
+
+    concrete = all(
+        isinstance(a, jax.Array) and not isinstance(a, jax.core.Tracer)
+        for a in jax.tree.leaves(args)
+    )
+    if _programs is None or not concrete:
+        return None
+    key = _key(jitted, args, static, compiler_options)
+    if key is None:
+        return None
+    with _loading:
+        stored = (
+            _loaded.get(key)
+            or _load(key)
+            or _compile_and_store(jitted, key, args, static, compiler_options)
+        )
+        _loaded[key] = stored
+    executable, outputs = stored
+    return lambda *args: jax.tree.unflatten(outputs, executable(*args))
 
 
 def _key(jitted, args, static, compiler_options) -> str | None:
@@ -181,9 +198,10 @@ def _load(key):
     import jax
     from jax.experimental import serialize_executable
 
-    _lapack_ready()
     try:
-        payload, inputs, outputs = pickle.loads((_programs / key).read_bytes())
+        payload, inputs, outputs, factorises = pickle.loads((_programs / key).read_bytes())
+        if factorises:
+            _lapack_ready()
         # The trees are rebuilt here from skeletons (their leaves numbered): a pickled
         # tree of equinox modules does not unflatten in another process. The executable
         # returns the output's leaves.
@@ -197,11 +215,16 @@ def _load(key):
         return None
 
 
+# The prefix of XLA's calls to LAPACK on a CPU (`lapack_dgetrf_ffi`, ...).
+_LAPACK = "@lapack_"
+
+
 @functools.cache
 def _lapack_ready():
     """Point XLA's LAPACK calls (an LU factorisation, say) at their routines. JAX does it as
     it lowers such an operation, which a process that loads a stored program never does:
-    its executable would call through an unset pointer (a segmentation fault)."""
+    its executable would call through an unset pointer (a segmentation fault). (About 0.1 s:
+    the routines are SciPy's, imported then.)"""
     import numpy as np
     from jaxlib import lapack
 
@@ -239,7 +262,8 @@ def _compile_and_store(jitted, key, args, static, compiler_options):
         numbered = lambda tree: jax.tree.unflatten(tree, list(range(tree.num_leaves)))
         _programs.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=_programs, delete=False) as file:
-            pickle.dump((payload, numbered(in_tree), numbered(outputs)), file)
+            factorises = _LAPACK in lowered.as_text()
+            pickle.dump((payload, numbered(in_tree), numbered(outputs), factorises), file)
         os.replace(file.name, _programs / key)  # whole, or not at all
     except (
         OSError,

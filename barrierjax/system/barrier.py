@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import non_negative, positive
+from ..compilation_cache import run_compiled
 from ..beam.layered import LayeredSection
 from ..beam.model import BeamModel, beam_model, linear_matrices
 
@@ -142,10 +143,10 @@ def stable_step(g: Guardrail, contact_stiffness=0.0, safety=0.8) -> float:
     stiffness (and the posts', the anchors' and `contact_stiffness` on each node's lateral
     dof, a bound on what the vehicle's crush springs add) over the lumped mass (numpy:
     concrete data only)."""
-    # Concrete data, even inside a caller's jit: the stiffness's program compiled ahead of
-    # time and run on the rail (under `ensure_compile_time_eval` its operations ran one
-    # by one, each compiled on first use: 7.9 s for a new mesh, against 0.8 s).
-    K = np.asarray(linear_matrices.lower(g.rail).compile()(g.rail)[0])
+    # Concrete data, even inside a caller's jit: the stiffness's program run on the rail
+    # (under `ensure_compile_time_eval` its operations ran one by one, each compiled on
+    # first use: 7.9 s for a new mesh, against 0.8 s).
+    K = np.asarray(run_compiled(linear_matrices, g.rail)[0])
     with jax.ensure_compile_time_eval():
         mass = np.asarray(lumped_mass(g))
     diagonal = np.zeros(K.shape[0])

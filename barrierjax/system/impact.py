@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import in_range, positive
+from ..compilation_cache import stored_program
 from ..beam.model import init_sections, internal_forces
 from .barrier import Guardrail, RigidWall, anchor_forces, lumped_mass, post_forces, stable_step
 from .contact import face_contact
@@ -93,8 +94,8 @@ def system_impact(
                 f"impact_point must lie on the rail, in (0, {length:g}) m; got {impact_point!r}"
             )
     dt, times = time_grid(vehicle, barrier, duration, dt, save_every)
-    return _integrate(vehicle, barrier, speed, angle, impact_point, jnp.asarray(friction),
-                      jnp.asarray(dt), n_saved=len(times), save_every=int(save_every))  # fmt: skip
+    arrays = (speed, angle, *map(jnp.asarray, (impact_point, friction, dt)))
+    return _integrate(vehicle, barrier, *arrays, n_saved=len(times), save_every=int(save_every))
 
 
 def _concrete_guardrail(vehicle, barrier) -> bool:
@@ -165,6 +166,7 @@ class _State(eqx.Module):
 # The step is an argument, not a compile-time constant: barriers of one mesh whose stable
 # steps differ (another section, other posts) run one program where their saved samples
 # are as many.
+@stored_program
 @functools.partial(jax.jit, static_argnames=("n_saved", "save_every"))
 def _integrate(vehicle, barrier, speed, angle, impact_point, friction, dt, *, n_saved, save_every):
     body_points, share = periphery(vehicle)
