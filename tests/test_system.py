@@ -244,3 +244,8 @@ def test_the_plan_view_animation_moves_the_vehicle_along_its_path(tmp_path):
     assert all(columns.size > 50 for columns in red)
     centres = [float(np.mean(columns)) for columns in red]
     assert centres == sorted(centres) and centres[-1] - centres[0] > 20
+    # Each frame's time in its title, above the axes: dark text, another in every frame
+    # (frames' palettes differ, so a few levels of difference mean nothing).
+    titles = [f[: f.shape[0] // 10] for f in frames]
+    assert all(np.any(t < 100) for t in titles)
+    assert all(np.sum(np.abs(a - b) > 60) > 10 for a, b in zip(titles, titles[1:]))
