@@ -185,6 +185,17 @@ def test_bad_inputs_name_the_field():
         RobustSizing(road_class="Autobahn")
 
 
+def test_a_crash_test_longer_than_its_risk_window_is_an_error(monkeypatch):
+    from barrierjax.design import robust
+
+    # The window a fifth of the softest design's longest test (not 1.25 times it).
+    monkeypatch.setattr(robust, "_WINDOW_MARGIN", 0.2)
+    short = RobustSizing(n_severity=2, n_mass=2)
+    softest = rail_barrier(short, short.lower)
+    with pytest.raises(Exception, match="a crash test's impact lasts longer than the 0.1 s"):
+        jax.block_until_ready(crash_test_responses(short, softest))
+
+
 # --------------------------------------------------------------------------------------
 # The optimum.
 
