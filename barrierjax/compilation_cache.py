@@ -13,7 +13,10 @@ this module only picks the folder and the thresholds.
   by default): the command line's first answer is the sum of dozens of small ones.
 
 A library import does not turn it on: a user's program decides (`enable()` does it in one
-line).
+line). JAX's cache keeps no program with a host callback, and a model called on traced
+values (under the caller's `jit`, `grad` or `vmap`) checks them with `equinox.error_if`,
+one: such a program compiles in every process, unless `EQX_ON_ERROR=nan` turns the checks
+into NaN outputs (a bad input or a failed solve then shows as NaN, not as an error).
 
 The persistent cache still traces and lowers a model before it finds the executable (its
 key is the lowered program): half a second for the oblique model, on every run of the
