@@ -11,6 +11,7 @@ import types
 from pathlib import Path
 
 import jax
+import numpy as np
 import pytest
 
 jax.config.update("jax_enable_x64", True)
@@ -213,7 +214,8 @@ def test_figures_writes_the_files(capsys, tmp_path):
     share one compile of the oblique model (~70 s on 2 cores), and 2.2-2.3 take ~45 s of
     material-law compiles: they are left to the registry test."""
     numbers = ["3.1", "3.5", "3.2.2", "3.2.3", "3.2.4", "3.3.3", "3.4.2", "3.4.3", "3.4.4", "3.4.5"]
-    status, out, err = run(capsys, "figures", "--out", str(tmp_path), "--only", *numbers)
+    args = ("figures", "--out", str(tmp_path), "--jobs", "1", "--only", *numbers)
+    status, out, err = run(capsys, *args)
     assert status == 0
     names = [f"fig_{number.replace('.', '_')}.png" for number in numbers]
     assert out.split() == [str(tmp_path / name) for name in names]
@@ -221,6 +223,27 @@ def test_figures_writes_the_files(capsys, tmp_path):
         path = tmp_path / name
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and path.stat().st_size > 10_000
         assert f"writing {path}" in err
+
+
+def test_figures_in_processes_are_the_figures_of_one(capsys, tmp_path):
+    """Two chapters' figures, each drawn by a process of its own: the same pixels as in
+    this process, the paths printed in the registry's order."""
+    from PIL import Image
+
+    numbers = ["3.1", "3.5", "3.4.2"]  # chapter3_elastic's two, chapter3_axial's one
+    status, out, err = run(capsys, "figures", "--out", str(tmp_path / "two"), "--jobs", "2",
+                           "--only", *numbers)  # fmt: skip
+    assert status == 0
+    names = [f"fig_{number.replace('.', '_')}.png" for number in numbers]
+    assert out.split() == [str(tmp_path / "two" / name) for name in names]
+    assert all(f"wrote {tmp_path / 'two' / name}" in err for name in names)
+    assert run(capsys, "figures", "--out", str(tmp_path / "one"), "--jobs", "1",
+               "--only", *numbers)[0] == 0  # fmt: skip
+    for name in names:
+        two, one = (np.asarray(Image.open(tmp_path / d / name)) for d in ("two", "one"))
+        np.testing.assert_array_equal(two, one)
+    status, out, err = run(capsys, "figures", "--jobs", "0", "--only", "3.1")
+    assert status == 2 and err.strip() == "error: --jobs must be a positive integer; got 0"
 
 
 def test_figures_registry_and_unknown_number(capsys, tmp_path):

@@ -5,7 +5,7 @@
                                 [--elements N] [--json] [--out DIR] [--no-plots]
     barrierjax assess RECORD.csv [--standard mash|en1317|nchrp350] [--cfc N]
                                  [--asi-edition 2010|1998] [--json] [--out DIR] [--no-plots]
-    barrierjax figures [--out DIR] [--only NUMBER ...]
+    barrierjax figures [--out DIR] [--only NUMBER ...] [--jobs N]
     barrierjax optimize [SCENE.toml --level LEVEL] [--road-class C] [--deflection-limit L]
                         [--json]
     barrierjax sweep [SCENE.toml] --vary KEY=LOW:HIGH [--vary ...] --samples N [--seed S]
@@ -220,14 +220,21 @@ def build_parser() -> argparse.ArgumentParser:
         figures_command,
         out=("barrierjax-figures", "figures"),
         help="write the report's figures as PNG files",
-        description="Reproduce the report's figures (sections 3.2 and 3.3 so far) as PNG "
-        "files named by figure number (fig_3_2_2.png, ...), printing each path written.",
+        description="Reproduce the report's figures (chapters 2 to 4) as PNG files named by "
+        "figure number (fig_3_2_2.png, ...), printing each path written.",
     )
     figures.add_argument(
         "--only",
         nargs="+",
         metavar="NUMBER",
         help="figure numbers to write, e.g. 3.2.4 (default: all)",
+    )
+    figures.add_argument(
+        "--jobs",
+        type=int,
+        metavar="N",
+        help="processes drawing the figures side by side, each a chapter's at a time "
+        "(default: one a core; 1 draws them all in this process)",
     )
 
     optimize = _add_command(
