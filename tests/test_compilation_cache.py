@@ -129,6 +129,44 @@ def test_a_stored_program_that_factorises_runs_in_the_next_process(tmp_path):
     assert _run(_SOLVING_PROGRAM, tmp_path / "cache") == first  # loaded, not traced
 
 
+# `run_compiled` within `keeping_programs()`: stored by the first process, loaded by the next
+# without a trace, and concrete inside a caller's jit either way.
+_RUN_COMPILED_PROGRAM = """
+import jax, jax.numpy as jnp, numpy as np
+jax.config.update("jax_enable_x64", True)
+from barrierjax import compilation_cache
+traces = []
+
+@jax.jit
+def double(x):
+    traces.append(1)
+    return 2.0 * x
+
+data = jnp.arange(3.0)  # concrete, closed over by the caller's jit
+
+@jax.jit
+def outer(y):
+    concrete = np.asarray(compilation_cache.run_compiled(double, data))
+    return y + concrete.sum()
+
+with compilation_cache.keeping_programs():
+    value = float(outer(1.0))
+print(len(traces), value)
+"""
+
+
+def test_run_compiled_is_concrete_in_a_callers_jit_and_stored_within_keeping_programs(tmp_path):
+    double, data = jax.jit(lambda x: 2.0 * x), jnp.arange(3.0)
+    concrete = jax.jit(
+        lambda y: y + np.asarray(compilation_cache.run_compiled(double, data)).sum()
+    )
+    assert float(concrete(1.0)) == 7.0  # not stored: compiled ahead of time
+    assert _run(_RUN_COMPILED_PROGRAM, tmp_path / "cache") == ["1", "7.0"]
+    (stored,) = (tmp_path / "cache" / "programs").iterdir()
+    assert stored.name.startswith("double-")
+    assert _run(_RUN_COMPILED_PROGRAM, tmp_path / "cache") == ["0", "7.0"]
+
+
 def test_a_damaged_stored_program_is_compiled_again(tmp_path):
     _run(_TRACED_PROGRAM, tmp_path / "cache")
     (stored,) = (tmp_path / "cache" / "programs").iterdir()
