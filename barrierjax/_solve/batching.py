@@ -133,8 +133,13 @@ def _parts(n: int, inputs: tuple, part_size: int = _PART_SIZE) -> int:
     once)."""
     if jax.default_backend() != "cpu" or any(isinstance(a, jax.core.Tracer) for a in inputs):
         return 1
+    return max(1, min(usable_cores(), most_parts(), n // part_size))
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity, where the system tells it)."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return max(1, min(cores or 1, most_parts(), n // part_size))
+    return cores or 1
 
 
 def most_parts() -> int:

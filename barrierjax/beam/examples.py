@@ -242,9 +242,9 @@ def report_example(
 @stored_program
 @eqx.filter_jit
 def _run(model, *, dts, scheme, substeps, iterations):
-    """The run, its steps `dts` (a tuple) constants of the program: checked as it is traced,
-    so that it holds no run-time check (a host callback), which neither the persistent
-    cache nor `stored_program` can keep, and a later process loads it."""
+    """The run. Its steps `dts` (a tuple) are constants of the program, checked as it is
+    traced: the program then holds no run-time check (a host callback, which neither JAX's
+    persistent cache nor `stored_program` keeps), and a later process loads it."""
     return integrate(
         model, np.asarray(dts), scheme=scheme, substeps=substeps, iterations=iterations
     )

@@ -22,9 +22,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import non_negative, positive
-from ..compilation_cache import run_compiled
 from ..beam.layered import LayeredSection
 from ..beam.model import BeamModel, beam_model, linear_matrices
+from ..compilation_cache import run_compiled
 
 
 class Posts(eqx.Module):

@@ -24,8 +24,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import in_range, positive
-from ..compilation_cache import stored_program
 from ..beam.model import init_sections, internal_forces
+from ..compilation_cache import stored_program
 from .barrier import Guardrail, RigidWall, anchor_forces, lumped_mass, post_forces, stable_step
 from .contact import face_contact
 from .vehicle import Vehicle, contact_stiffness_bound, periphery, rotation, tyre_forces
