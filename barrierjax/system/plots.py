@@ -16,35 +16,36 @@ from .vehicle import Vehicle, outline
 G = 9.80665
 
 
-def _outline(v: Vehicle, position, yaw):
-    """The vehicle's rectangle in global axes (5, 2), closed."""
-    body = np.asarray(outline(v))
-    c, s = np.cos(yaw), np.sin(yaw)
-    return np.vstack([body, body[:1]]) @ np.array([[c, s], [-s, c]]) + np.asarray(position)
-
-
 def _rail_x(barrier):
     return np.asarray(barrier.rail.coords[:, 0]) if isinstance(barrier, Guardrail) else None
 
 
-def _plan(result, vehicle, barrier, k) -> list:
-    """The plan view's lines at history sample `k`, (x, y) each: the rail and its posts (a
-    guardrail's), then the vehicle's outline."""
+def _plan(result: SystemResult, vehicle: Vehicle, barrier):
+    """The function k -> the plan view's lines at history sample `k`, (x, y) each: the rail
+    and its posts (a guardrail's), then the vehicle's outline (its rectangle, closed). The
+    history, the outline and the rail are read into numpy once, not at every frame."""
     h = result.history
-    lines = []
+    position, yaw = np.asarray(h.position), np.asarray(h.yaw)
+    body = np.asarray(outline(vehicle))
+    body = np.vstack([body, body[:1]])
     x = _rail_x(barrier)
     if x is not None:
-        rail = np.asarray(h.rail_deflection[k])
+        lateral = np.asarray(h.rail_deflection)
         posts = np.asarray(barrier.post_nodes)
-        lines += [(x, rail), (x[posts], rail[posts])]
-    outline = _outline(vehicle, h.position[k], float(h.yaw[k]))
-    return lines + [(outline[:, 0], outline[:, 1])]
+
+    def lines(k) -> list:
+        c, s = np.cos(yaw[k]), np.sin(yaw[k])
+        moved = body @ np.array([[c, s], [-s, c]]) + position[k]
+        rail = [] if x is None else [(x, lateral[k]), (x[posts], lateral[k][posts])]
+        return rail + [(moved[:, 0], moved[:, 1])]
+
+    return lines
 
 
-def _draw_plan(ax, result, vehicle, barrier, k, *, faded=False) -> list:
-    """The plan view at history sample `k` drawn on `ax`: its lines (`_plan`'s order)."""
+def _draw_plan(ax, plan, k, *, faded=False) -> list:
+    """The plan view at history sample `k` drawn on `ax`: its lines (`plan`'s, `_plan`)."""
     alpha = 0.35 if faded else 1.0
-    *rail, body = _plan(result, vehicle, barrier, k)
+    *rail, body = plan(k)
     styles = [dict(color="tab:blue", lw=1.5), dict(marker="s", ls="", ms=3, color="0.3")]
     drawn = [ax.plot(*xy, alpha=alpha, **style)[0] for xy, style in zip(rail, styles)]
     return drawn + ax.plot(*body, color="tab:red", alpha=alpha, lw=1.2)
@@ -59,8 +60,9 @@ def plan_view_figure(result: SystemResult, vehicle: Vehicle, barrier, *, snapsho
     ax = fig.add_subplot()
     n = h.time.shape[0]
     picks = np.linspace(0, n - 1, snapshots).round().astype(int)
+    plan = _plan(result, vehicle, barrier)
     for k in picks:
-        _draw_plan(ax, result, vehicle, barrier, k, faded=k != picks[-1])
+        _draw_plan(ax, plan, k, faded=k != picks[-1])
         t = float(h.time[k])
         ax.annotate(f"{t * 1e3:.0f} ms", np.asarray(h.position[k]), fontsize=7, color="tab:red")
     ax.plot(np.asarray(h.position[:, 0]), np.asarray(h.position[:, 1]), ":", color="tab:red",
@@ -143,7 +145,8 @@ def animate_plan_view(result: SystemResult, vehicle: Vehicle, barrier, path, *, 
     ax.set_xlim(left, right)
     ax.set_ylim(low, high)
     ax.set_aspect("equal")
-    lines = _draw_plan(ax, result, vehicle, barrier, picks[0])
+    plan = _plan(result, vehicle, barrier)
+    lines = _draw_plan(ax, plan, picks[0])
     times = np.asarray(h.time)
     label = lambda k: (title + ": " if title else "") + f"{times[k] * 1e3:.0f} ms"
     ax.set_title(label(picks[-1]))  # the layout leaves room for a title
@@ -157,7 +160,7 @@ def animate_plan_view(result: SystemResult, vehicle: Vehicle, barrier, path, *, 
 
     images = []
     for k in picks:
-        for line, xy in zip(lines, _plan(result, vehicle, barrier, k)):
+        for line, xy in zip(lines, plan(k)):
             line.set_data(*xy)
         ax.title.set_text(label(k))
         canvas.restore_region(background)
