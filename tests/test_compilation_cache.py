@@ -126,7 +126,7 @@ def test_a_stored_program_that_factorises_runs_in_the_next_process(tmp_path):
     first = _run(_SOLVING_PROGRAM, tmp_path / "cache")
     assert [float(v) for v in first] == pytest.approx([0.1, 0.6], rel=1e-14)
     assert len(list((tmp_path / "cache" / "programs").iterdir())) == 1
-    assert _run(_SOLVING_PROGRAM, tmp_path / "cache") == first  # loaded, not traced
+    assert _run(_SOLVING_PROGRAM, tmp_path / "cache") == first  # loaded: it crashed here
 
 
 # `run_compiled` within `keeping_programs()`: stored by the first process, loaded by the next
