@@ -71,14 +71,21 @@ def test_a_step_crossing_a_sample_reads_each_intervals_own_quintic():
 def test_a_load_short_of_the_trace_start_passes_the_piece_by_its_own_margin():
     # The crushing phase, the load at 0.5 ahead of S* = 1 where the trace starts, whose
     # first intervals are short (the steps that start the solve): the piece spans the
-    # view's eight samples, to 1.0007, and the step may take the load past that by a
-    # hundredth of the piece. A hundredth of the distance from the load (1.01 times it,
-    # as within a piece) reached 1.0057, past more samples than the next step's view
-    # holds: that view lost the load, and its step length was zero for good.
+    # view's eight samples, to 1.0007, and the step may take the load to its end, the
+    # view's last sample (no further: `test_a_step_never_carries_the_load_past_what_the_
+    # next_view_can_find`). A hundredth of the distance from the load (1.01 times it, as
+    # within a piece) reached 1.0057, past more samples than the next step's view holds:
+    # that view lost the load, and its step length was zero for good.
     points = [1.0 + 1e-4 * k for k in range(60)] + [2.0]
     past = _past(points, 0.5, 0.6)
     end = float(past.origin + past.width)
     assert float(past.origin) == 1.0 and end == pytest.approx(1.0007, rel=1e-12)
+    assert 0.5 + float(past.room) == pytest.approx(end, rel=1e-12)
+    # Short of the view's last sample, a piece is passed by a hundredth of itself.
+    points = [1.0 + 1e-4 * k for k in range(5)] + [2.0, 3.0, 4.0, 5.0]
+    past = _past(points, 0.5, 0.45)
+    end = float(past.origin + past.width)
+    assert end == pytest.approx(1.0004, rel=1e-12)
     assert 0.5 + float(past.room) == pytest.approx(end + 0.01 * (end - 1.0), rel=1e-12)
 
 
@@ -96,3 +103,30 @@ def test_a_cluster_of_short_intervals_is_spanned_by_one_piece():
     # With no short interval, no span: the same cluster read by a step of 0.005.
     short_step = _past(points, 1.0005, 0.005)
     assert float(short_step.width) == pytest.approx(0.001, rel=1e-9)
+
+
+def test_a_step_never_carries_the_load_past_what_the_next_view_can_find():
+    # The crushing phase of a force ratio near 1 (mass ratio 8.2, phi 1.011, rtol 1e-9):
+    # where the load crossed S*, the steps restarted short, and the hinge recorded a
+    # cluster of intervals of 1e-6, more of them than a view holds. Later the load comes
+    # up to it in steps of 0.02. The piece spans the view's samples of the cluster, and
+    # 1.01 times the distance to its end reached past the rest of the cluster: the next
+    # step's view (from the last sample of this one's) held none beyond the load, its room
+    # was zero and the solve stalled. The load now stays within its step's view.
+    points = [0.0, 1.0, 1.5, 2.0] + [2.0 + 1e-6 * k for k in range(1, 21)] + [3.0]
+    stage = SimpleNamespace(first=jnp.asarray(0, jnp.int32), last=jnp.asarray(64, jnp.int32))
+    recording = _trace(points)
+    view = lambda x, previous=None: read_past(
+        SimpleNamespace(position=jnp.asarray(x)),
+        SimpleNamespace(position=jnp.asarray(0.6)),
+        1.0,
+        stage,
+        recording,
+        previous,
+    )
+    past = view(1.6)
+    last = float(np.max(past.hinge[np.isfinite(past.hinge)]))
+    assert last == pytest.approx(2.000006, rel=1e-12)
+    assert float(past.origin + past.width) == last and 1.6 + float(past.room) == last
+    following = view(1.6 + float(past.room), past)
+    assert float(following.origin) <= last and float(following.room) > 0.0

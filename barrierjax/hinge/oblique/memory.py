@@ -179,6 +179,11 @@ def read_past(y, f, h, stage, recording: Recording, previous: Past | None = None
     _, h_k, width_next, powers_next = piece(j, k)
     crossing = within & (k > j) & (room < travel)
     room = jnp.where(crossing, past_end(h_k), room)
+    # The next step's view is found from this one's samples, so the load stays within
+    # them: a margin past a piece's end could otherwise carry it over a cluster of short
+    # intervals (recorded where the steps restarted short) longer than a view, which then
+    # lost it, its step length zero for good.
+    room = jnp.minimum(room, jnp.maximum(reach - x, 0.0))
     return Past(
         origin=h_i,
         width=width,
