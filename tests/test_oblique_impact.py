@@ -455,6 +455,22 @@ def test_a_crushing_load_that_crosses_the_trace_start_in_one_step_goes_on():
             assert float(getattr(r, name)) == pytest.approx(float(getattr(fine, name)), rel=1e-7)
 
 
+def test_a_crushing_end_that_dips_within_one_step_is_not_missed():
+    # The vehicle's normal speed comes down to the load point's and the two part again
+    # (their difference, the crushing phase's event, touches zero and rises): the crushing
+    # ends there. At rtol 1e-6 and 1e-8 one step straddled the dip, its ends both positive,
+    # and the vehicle crushed on to T = 2.83 instead of 0.79: the exit angle 19.33 degrees,
+    # where rtol 1e-7 and 1e-9 to 1e-12 give 25.87 (benchmarks/oblique_impact.py's box,
+    # rng 1, scenario 1741 of 8,192).
+    mu, phi, vn, vh = 6.8035394917747825, 1.673856917492205, 0.6889817610205201, 0.6789526769284858
+    fine = oblique_impact(mu, phi, vn, vh, rtol=1e-10)
+    assert float(fine.t_star) == pytest.approx(0.7867, abs=1e-4)
+    for rtol, within in ((1e-6, 1e-3), (1e-8, 1e-6)):
+        r = oblique_impact(mu, phi, vn, vh, rtol=rtol)
+        for name in ("t_star", "duration", "exit_angle_deg"):
+            assert float(getattr(r, name)) == pytest.approx(float(getattr(fine, name)), rel=within)
+
+
 def test_a_crushing_load_that_reaches_a_cluster_of_the_trace_goes_on():
     # A force ratio near 1: where the load crossed S*, the steps restarted short and the
     # hinge recorded a cluster of intervals of about 1e-6; when the load came up to that

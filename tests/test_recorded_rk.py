@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from barrierjax._solve.recorded_rk import _A, _locate, _stored, _tied
+from barrierjax._solve.recorded_rk import _A, _dip, _locate, _stored, _tied
 
 
 def _located_time(a, b, h):
@@ -73,3 +73,28 @@ def test_the_stages_are_diffrax_dopri5s():
     tableau = diffrax.Dopri5.tableau
     assert _A[1:] == [[float(w) for w in row] for row in tableau.a_lower]
     assert _A[-1] == [float(w) for w in tableau.b_sol[:-1]] and tableau.b_sol[-1] == 0.0
+
+
+def test_a_term_that_dips_below_zero_within_a_step_is_found():
+    """`_dip`: a term positive at both ends of a step that falls below zero and back within
+    it (a step that straddles both its zeros, where the ends alone see no crossing): the
+    fraction of the step at its deepest point, from the cubic through the ends' values and
+    slopes (here exact: the term is a parabola)."""
+    term = lambda depth, centre: ((0.0 - centre) ** 2 - depth, (1.0 - centre) ** 2 - depth)
+    slopes = lambda centre: (-2.0 * centre, 2.0 * (1.0 - centre))
+    ends = lambda depth, centre: [jnp.asarray([v]) for v in (*term(depth, centre),)]
+    for centre in (0.3, 0.5, 0.8):
+        e0, e1 = ends(0.01, centre)
+        d0, d1 = (jnp.asarray([v]) for v in slopes(centre))
+        u, dipped = _dip(e0, e1, d0, d1)
+        assert bool(dipped) and float(u) == pytest.approx(centre, rel=1e-12)
+        # Above zero throughout: no dip, whatever the turning point.
+        e0, e1 = ends(-0.01, centre)
+        assert not bool(_dip(e0, e1, d0, d1)[1])
+    # Falling throughout (no turning point), or an inactive term (+inf): no dip; of two
+    # dipping terms, the first to reach its deepest point.
+    inf = jnp.inf
+    e0, e1, d0, d1 = (jnp.asarray(v) for v in ([0.5, inf, 0.24, 0.08], [0.1, inf, 0.24, 0.48],
+                                                [-0.4, 0.0, -1.0, -0.6], [-0.4, 0.0, 1.0, 1.4]))
+    u, dipped = _dip(e0, e1, d0, d1)
+    assert bool(dipped) and float(u) == pytest.approx(0.3, rel=1e-12)

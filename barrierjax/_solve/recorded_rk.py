@@ -241,6 +241,30 @@ def _locate(event, start, end, e_start, e_end, length):
     return at(jnp.clip(u - e / jnp.where(slope != 0.0, slope, 1.0), 0.0, 1.0))
 
 
+def _dip(e_start, e_end, slope_start, slope_end):
+    """Where a term of the event, positive at both ends of the step, dips below zero
+    within it: (the fraction of the step at the deepest point of the first such term,
+    whether any does). Each term is taken as the cubic through its values and slopes
+    (along the step's fraction) at the ends; a term falling at the start and rising at the
+    end has one minimum within, where the cubic's slope, a quadratic, changes sign."""
+    a = 2.0 * e_start + slope_start - 2.0 * e_end + slope_end
+    b = -3.0 * e_start - 2.0 * slope_start + 3.0 * e_end - slope_end
+    c = slope_start
+    turning = (e_start > 0.0) & (e_end > 0.0) & (slope_start < 0.0) & (slope_end > 0.0)
+    # The root in (0, 1) of 3a u^2 + 2b u + c (one, as the slope changes sign there), in
+    # the form that does not cancel.
+    root = jnp.sqrt(jnp.maximum(b**2 - 3.0 * a * c, 0.0))
+    q = -(b + jnp.where(b >= 0.0, root, -root))
+    safe = lambda x: jnp.where(x != 0.0, x, 1.0)
+    candidates = jnp.stack([q / safe(3.0 * a), c / safe(q)])
+    inside = (candidates > 0.0) & (candidates < 1.0)
+    u = jnp.where(inside[0], candidates[0], candidates[1])
+    u = jnp.where(turning & jnp.any(inside, axis=0), u, 1.0)
+    depth = ((a * u + b) * u + c) * u + e_start
+    dips = turning & (depth < 0.0)
+    return jnp.min(jnp.where(dips, u, 1.0)), jnp.any(dips)
+
+
 # Newton iterations of `_locate`, from the secant. Three were not always enough: on one
 # scenario of benchmarks/oblique_impact.py's (a) at rtol 1e-10, a vmapped run located a
 # stage's end 5e-7 off in time (the bisection safeguard had taken over), and t_final came
@@ -308,7 +332,9 @@ class RecordedRK(eqx.Module):
     stage, rescale, done)` gives the next stage, the state it starts from and the factor
     that turns a step length in this stage's variable into one in the next's, or ends the
     solve. Each stage starts with a step of length zero, which evaluates its field; a
-    stage whose event is not positive there ends after it.
+    stage whose event is not positive there ends after it. A term positive at both ends of
+    a step may still have dipped below zero within it (the ends' values and slopes say so,
+    `_dip`): the step is then taken again, shorter, to end within the dip.
 
     `past = view(y, f, h, stage, recording, previous)` is taken at the start of each step
     (`h` the length the step will try, unless `max_step` bounds it) and serves every stage
@@ -427,7 +453,13 @@ class RecordedRK(eqx.Module):
         ratio = jax.lax.stop_gradient(_error_ratio(y, y1, error, self.rtol, self.atol))
         # (A finite state whose field is not would carry a NaN into the next step length.)
         finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves((y1, f1))]))
-        accept = (ratio <= 1.0) & finite
+        # A term that dips below zero and back within the step ends the stage there too:
+        # the step is taken again, to the dip's deepest point, where it crosses.
+        slope = lambda x, fx, rx: jax.jvp(event, (x, fx), (fx, rx))[1] * length
+        dip_at, dipped = jax.lax.stop_gradient(
+            _dip(carry.event, e1, slope(y, f, r), slope(y1, f1, r1))
+        )
+        accept = (ratio <= 1.0) & finite & ~(dipped & stepping)
         ended = accept & (jnp.min(e1) <= 0.0)
         # A stage ending within a step ends on the step's interpolant; one ending at its
         # start ends there.
@@ -445,6 +477,7 @@ class RecordedRK(eqx.Module):
         keep = lambda new, old, when: jax.tree.map(lambda a, b: jnp.where(when, a, b), new, old)
         y_reached, f_reached, r_reached = reached
         factor = jnp.where(finite, jnp.clip(0.9 * ratio**-0.2, 0.2, 5.0), 0.2)
+        factor = jnp.where(dipped & finite & (ratio <= 1.0), dip_at, factor)
         mode = jnp.where(
             ended, jnp.where(done, _DONE, _START), jnp.where(accept, _STEP, carry.mode)
         )
