@@ -243,7 +243,7 @@ def _locate(event, start, end, e_start, e_end, length):
 
 def _dip(e_start, e_end, slope_start, slope_end):
     """Where a term of the event, positive at both ends of the step, dips below zero
-    within it: (the fraction of the step at the deepest point of the first such term,
+    within it: (the fraction of the step at the earliest of such terms' deepest points,
     whether any does). Each term is taken as the cubic through its values and slopes
     (along the step's fraction) at the ends; a term falling at the start and rising at the
     end has one minimum within, where the cubic's slope, a quadratic, changes sign."""
@@ -459,7 +459,9 @@ class RecordedRK(eqx.Module):
         dip_at, dipped = jax.lax.stop_gradient(
             _dip(carry.event, e1, slope(y, f, r), slope(y1, f1, r1))
         )
-        accept = (ratio <= 1.0) & finite & ~(dipped & stepping)
+        # (A start, of length zero, has slopes zero: no dip.)
+        within_error = (ratio <= 1.0) & finite
+        accept = within_error & ~dipped
         ended = accept & (jnp.min(e1) <= 0.0)
         # A stage ending within a step ends on the step's interpolant; one ending at its
         # start ends there.
@@ -477,7 +479,7 @@ class RecordedRK(eqx.Module):
         keep = lambda new, old, when: jax.tree.map(lambda a, b: jnp.where(when, a, b), new, old)
         y_reached, f_reached, r_reached = reached
         factor = jnp.where(finite, jnp.clip(0.9 * ratio**-0.2, 0.2, 5.0), 0.2)
-        factor = jnp.where(dipped & finite & (ratio <= 1.0), dip_at, factor)
+        factor = jnp.where(within_error & dipped, dip_at, factor)
         mode = jnp.where(
             ended, jnp.where(done, _DONE, _START), jnp.where(accept, _STEP, carry.mode)
         )
