@@ -92,7 +92,8 @@ def keeping_programs():
         _programs = before
 
 
-# Where `stored_program` keeps executables (None: it is off), and those of this process.
+# Where `stored_program` keeps executables (None: it is off), and those of this process
+# (by folder and key).
 _programs: Path | None = None
 _loaded: dict = {}
 # One load or compilation at a time: batches solved in parts call an entry point from
@@ -141,12 +142,14 @@ def _stored(jitted, args, static, compiler_options):
     if key is None:
         return None
     with _loading:
+        # Keyed by the folder too: a process that moves to another folder keeps its
+        # programs there as well.
         stored = (
-            _loaded.get(key)
+            _loaded.get((_programs, key))
             or _load(key)
             or _compile_and_store(jitted, key, args, static, compiler_options)
         )
-        _loaded[key] = stored
+        _loaded[_programs, key] = stored
     executable, outputs = stored
     return lambda *args: jax.tree.unflatten(outputs, executable(*args))
 

@@ -176,6 +176,17 @@ def test_a_damaged_stored_program_is_compiled_again(tmp_path):
     assert _run(_TRACED_PROGRAM, tmp_path / "cache")[0] == "0"  # mended
 
 
+def test_a_process_that_moves_to_another_folder_keeps_its_programs_there(monkeypatch, tmp_path):
+    # The process's own executables were once keyed by the program alone: after a move to
+    # another folder (BARRIERJAX_CACHE_DIR changed), nothing was kept in the new one.
+    triple = compilation_cache.stored_program(jax.jit(lambda x: 3.0 * x))
+    for name in ("first", "second"):
+        monkeypatch.setenv("BARRIERJAX_CACHE_DIR", str(tmp_path / name))
+        with compilation_cache.keeping_programs() as folder:
+            assert float(triple(jnp.asarray(2.0))) == 6.0
+        assert [p.name.split("-")[0] for p in folder.iterdir()] == ["<lambda>"]
+
+
 def test_models_under_a_stored_program_give_what_jit_gives(monkeypatch, tmp_path):
     # The normal model through its stored program (twice: stored, then loaded in this
     # process), under jax.grad (traced: plain jit), and without the store; and `simulate`,
