@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int, PyTree
 
-from .hermite import Quintic
+from .hermite import Quintic, cubic_powers, polynomial
 
 # Dormand & Prince (1980): the stages, as diffrax.Dopri5 has them (the last row is the
 # fifth-order solution, first-same-as-last; tests/test_recorded_rk.py compares them), and,
@@ -247,9 +247,8 @@ def _dip(e_start, e_end, slope_start, slope_end):
     whether any does). Each term is taken as the cubic through its values and slopes
     (along the step's fraction) at the ends; a term falling at the start and rising at the
     end has one minimum within, where the cubic's slope, a quadratic, changes sign."""
-    a = 2.0 * e_start + slope_start - 2.0 * e_end + slope_end
-    b = -3.0 * e_start - 2.0 * slope_start + 3.0 * e_end - slope_end
-    c = slope_start
+    cubic = cubic_powers(1.0, (e_start, slope_start), (e_end, slope_end))
+    _, c, b, a = cubic[:4]
     turning = (e_start > 0.0) & (e_end > 0.0) & (slope_start < 0.0) & (slope_end > 0.0)
     # The root in (0, 1) of 3a u^2 + 2b u + c (one, as the slope changes sign there), in
     # the form that does not cancel.
@@ -260,7 +259,7 @@ def _dip(e_start, e_end, slope_start, slope_end):
     inside = (candidates > 0.0) & (candidates < 1.0)
     u = jnp.where(inside[0], candidates[0], candidates[1])
     u = jnp.where(turning & jnp.any(inside, axis=0), u, 1.0)
-    depth = ((a * u + b) * u + c) * u + e_start
+    depth, _ = polynomial(cubic, 1.0, u, derivatives=1)
     dips = turning & (depth < 0.0)
     return jnp.min(jnp.where(dips, u, 1.0)), jnp.any(dips)
 
