@@ -82,7 +82,7 @@ def test_a_term_that_dips_below_zero_within_a_step_is_found():
     slopes (here exact: the term is a parabola)."""
     term = lambda depth, centre: ((0.0 - centre) ** 2 - depth, (1.0 - centre) ** 2 - depth)
     slopes = lambda centre: (-2.0 * centre, 2.0 * (1.0 - centre))
-    ends = lambda depth, centre: [jnp.asarray([v]) for v in (*term(depth, centre),)]
+    ends = lambda depth, centre: [jnp.asarray([v]) for v in term(depth, centre)]
     for centre in (0.3, 0.5, 0.8):
         e0, e1 = ends(0.01, centre)
         d0, d1 = (jnp.asarray([v]) for v in slopes(centre))
