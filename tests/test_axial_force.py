@@ -6,7 +6,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from barrierjax._solve.phases import STEPS_SPENT
 from barrierjax.hinge import axial_impact, normal_impact
+from barrierjax.hinge.axial.api import _axial_impact
+from barrierjax.hinge.response import kinetic_energy_balance
 
 # (mass ratio, force ratio, speed): light, medium and heavy vehicles, weak and strong barriers.
 CASES = [(0.5, 2.0, 1.0), (5.0, 1.5, 0.3), (0.05, 8.0, 2.0), (100.0, 1.2, 1.0)]
@@ -154,6 +157,34 @@ def test_vmap_equals_loop(compilations):
             np.testing.assert_allclose(
                 getattr(batched, field)[i], getattr(single, field), rtol=1e-10, err_msg=field
             )
+
+
+def test_a_spent_step_budget_grows_for_those_scenarios_alone():
+    # A heavy vehicle that barely yields the barrier: the crushing phase needs steps in
+    # proportion to 1 / (phi - 1), more than its first budget; that scenario alone is solved
+    # again with larger budgets, and the batch's others keep the first solve's answers.
+    heavy = (43.61, 1.00234, 0.03555, 26.81)
+    first = _axial_impact(
+        *(jnp.asarray(x) for x in heavy),
+        jnp.asarray(1e-10),
+        n_history=0,
+        string_cells=128,
+        string_courant=1.0,
+        budget=1,
+    )[1]
+    assert int(first[0]) == STEPS_SPENT, first
+    mu, phi, v = (jnp.asarray(x) for x in zip(*CASES[:3], heavy[:3]))
+    eta0 = jnp.asarray([1.0, 0.5, 0.2, heavy[3]])
+    batched = _axial(mu, phi, v, eta0)
+    three = _axial(mu[:3], phi[:3], v[:3], eta0[:3])
+    np.testing.assert_allclose(batched.damage[:3], three.damage, rtol=1e-13)
+    single = _axial(*heavy)
+    for field in FIELDS:
+        np.testing.assert_allclose(
+            getattr(batched, field)[3], getattr(single, field), rtol=1e-10, err_msg=field
+        )
+    lost = kinetic_energy_balance(single, heavy[0], heavy[2], 0.0)
+    assert abs(float(lost)) <= 1e-9 * 0.5 * heavy[0] * heavy[2] ** 2
 
 
 @pytest.mark.parametrize(

@@ -53,7 +53,7 @@ def test_concrete_failures_raise_naming_the_phase_and_the_scenario():
     with pytest.raises(
         SolveError,
         match=r"^model: the second phase spent its step budget "
-        r"\(scenario 1 of 3\)$",
+        r"\(scenario 1 of 3; 2 of them failed\)$",
     ) as raised:
         raise_failures("model", result, failures, PHASES)
     assert raised.value.scenario == 1

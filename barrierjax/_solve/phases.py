@@ -61,7 +61,8 @@ class SolveError(RuntimeError):
         first = min(reasons)
         if size is None:
             return cls(reasons[first])
-        return cls(f"{reasons[first]} (scenario {first} of {size})", reasons)
+        more = f"; {len(reasons)} of them failed" * (len(reasons) > 1)
+        return cls(f"{reasons[first]} (scenario {first} of {size}{more})", reasons)
 
 
 class PhaseSolution(eqx.Module):

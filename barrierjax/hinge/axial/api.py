@@ -3,13 +3,16 @@
 into the `NormalImpact` of report 3.2."""
 
 import functools
+import math
 
 import jax
 import jax.numpy as jnp
+import numpy as np
+from jax.core import Tracer
 
 from ... import _checks
 from ..._solve.batching import solve_padded, sorted_chunks
-from ..._solve.phases import SOLVED, raise_failures
+from ..._solve.phases import SOLVED, STEPS_SPENT, raise_failures
 from ..._solve.sensitivity import forward_jacobian_jvp
 from ...compilation_cache import stored_program
 from ..normal.api import checked_inputs, normal_impact
@@ -18,21 +21,24 @@ from .stages import PHASES, axial_stages
 
 
 @stored_program
-@functools.partial(jax.jit, static_argnames=("n_history", "string_cells", "string_courant"))
-def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string_courant):
+@functools.partial(
+    jax.jit, static_argnames=("n_history", "string_cells", "string_courant", "budget")
+)
+def _axial_impact(mu, phi, speed, eta0, rtol, *, n_history, string_cells, string_courant, budget):
     """(the result, the failure codes of `stages.PHASES`): the beam stage by time
     integration, then the plastic string where N reaches N0; in the speed-free variables
     the speed enters through eta0 V^2. `rtol` is traced: a new
     tolerance does not recompile. A flat array of scenarios is solved inside this `jit`,
     in sorted vmapped chunks (`_CHUNK`), and their derivatives taken as problems of their
     own (`forward_jacobian_jvp`); a `vmap` around a scalar call hands the chunks its arrays
-    (the scalar solve under `vmap` stepped every scenario until the slowest was done)."""
+    (the scalar solve under `vmap` stepped every scenario until the slowest was done).
+    `budget`: the solves' step budgets, as a multiple of `stages._BUDGETS`."""
     yields = phi > 1.0
     safe_phi = jnp.where(yields, phi, 2.0)
 
     def stages(mu, phi, eta, rtol):
         def one(mu, phi, eta):
-            options = {"n_history": n_history, "string_cells": string_cells}
+            options = {"n_history": n_history, "string_cells": string_cells, "budget": budget}
             return axial_stages(mu, phi, eta, rtol=rtol, string_courant=string_courant, **options)
 
         if mu.ndim == 0:
@@ -104,8 +110,12 @@ def axial_impact(
     padded with copies to the next power of two or whole chunk, so that batches of nearby
     sizes share one compiled program; on a CPU, 2,048 scenarios or more in parts run side
     by side, one a core); `rtol` is traced, so a new tolerance does not recompile. A
-    failed solve raises as in `normal_impact`, naming the stage. Needs float64 (JAX's
-    `jax_enable_x64`) where `axial_ratio` is not a Python `0`.
+    failed solve raises as in `normal_impact`, naming the stage. Where a solve spends its
+    step budget (a heavy vehicle with a force ratio close to 1, whose crushing phase needs
+    steps in proportion to 1 / (phi - 1); a long string), those scenarios are solved again
+    with 4 and then 16 times the budgets (each a new compilation); inside a caller's `jit`,
+    `vmap` or `grad` the budgets cannot grow, and a spent one is a run-time error. Needs
+    float64 (JAX's `jax_enable_x64`) where `axial_ratio` is not a Python `0`.
     """
     if isinstance(axial_ratio, int | float) and axial_ratio == 0:
         return normal_impact(mass_ratio, force_ratio, speed, rtol=rtol, n_history=n_history)
@@ -127,12 +137,46 @@ def axial_impact(
         string_cells=int(string_cells),
         string_courant=float(string_courant),
     )
-    if args[0].ndim == 0:
-        result, failures = _axial_impact(*args, rtol, **options)
-    else:
-        solve = lambda *x: _axial_impact(*x[:-1], rtol, **options)
-        result, failures = solve_padded(solve, args, _CHUNK)
+
+    def solve(args, budget):
+        if args[0].ndim == 0:
+            return _axial_impact(*args, rtol, **options, budget=budget)
+        padded = lambda *x: _axial_impact(*x[:-1], rtol, **options, budget=budget)
+        return solve_padded(padded, args, _CHUNK)
+
+    result, failures = _with_budgets_grown(solve, args)
     return raise_failures("axial_impact", result, failures, PHASES)
+
+
+# A spent step budget grows by this factor, up to this multiple of `stages._BUDGETS`.
+_GROWTH, _LARGEST_BUDGET = 4, 16
+
+
+def _with_budgets_grown(solve, args):
+    """`solve(args, 1)`, and where a concrete solve spent a step budget, those scenarios
+    solved again by `solve(their args, budget)` at `_GROWTH` times the budget, up to
+    `_LARGEST_BUDGET`; the other scenarios' results are those of the first solve."""
+    result, failures = solve(args, 1)
+    budget, shape = 1, args[0].shape
+    while budget < _LARGEST_BUDGET and not isinstance(failures, Tracer):
+        spent = np.flatnonzero(np.any(np.asarray(failures) == STEPS_SPENT, axis=-1))
+        if spent.size == 0:
+            break
+        budget *= _GROWTH
+        if not shape:
+            result, failures = solve(args, budget)
+            continue
+        again = tuple(jnp.ravel(a)[spent] for a in args)
+        put = lambda whole, part: _rows_replaced(whole, shape, spent, part)
+        result, failures = jax.tree.map(put, (result, failures), solve(again, budget))
+    return result, failures
+
+
+def _rows_replaced(whole, shape, rows, part):
+    """`whole`, whose leading axes are the scenarios' `shape`, with the scenarios at the
+    flat indices `rows` replaced by `part`'s (leading axis: those scenarios)."""
+    flat = whole.reshape((math.prod(shape), *whole.shape[len(shape):]))
+    return flat.at[rows].set(part).reshape(whole.shape)
 
 
 # The batch is padded (`padded_size`) to the next power of two up to a chunk, then to whole

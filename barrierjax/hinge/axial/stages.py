@@ -158,7 +158,14 @@ def _decelerating_field(sigma, y: _Decelerating, args) -> _Decelerating:
     )
 
 
-def _beam_phases(p: _Params, *, rtol, solver, dense):
+# The step budgets of the three solves at `budget` 1: the crushing phase, the decelerative
+# phase and the string stage. The crushing phase needs steps in proportion to 1 / (phi - 1)
+# as phi -> 1 (its hinge equation is stiff in 1 / V0), about 5,000 at phi - 1 = 1e-3 for
+# heavy vehicles; the string of a heavy, fast vehicle a million or more.
+_BUDGETS = (4096, 16384, 1_000_000)
+
+
+def _beam_phases(p: _Params, *, rtol, solver, dense, budget):
     """The two phases of the beam stage, each ending where N reaches N0 if it does."""
     options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol, "dense": dense}
     zero = jnp.zeros_like(p.mu)
@@ -170,7 +177,7 @@ def _beam_phases(p: _Params, *, rtol, solver, dense):
         p,
         switch=lambda t, y, p: jnp.min(jnp.stack(_crushing_ends(t, y, p, rtol))),
         bisect=True,  # the least of three: kinks, and the velocities can meet tangentially
-        max_steps=4096,
+        max_steps=_BUDGETS[0] * budget,
         **options,
     )
     a = first.y_end
@@ -185,7 +192,7 @@ def _beam_phases(p: _Params, *, rtol, solver, dense):
         (p, a.beam_velocity),
         switch=lambda sigma, y, args: 1.0 - _axial(y.displacement, args[0])[0],
         switch_required=False,
-        max_steps=16384,
+        max_steps=_BUDGETS[1] * budget,
         **options,
     )
     return first, second, string_in_first, locked
@@ -438,19 +445,19 @@ def axial_stages(
     solver=None,
     string_cells: int = 128,
     string_courant: float = 1.0,
-    string_max_steps: int = 1_000_000,
+    budget: int = 1,
 ) -> dict:
     """Both stages, speed-free (see the module docstring); `eta` = eta0 V^2. Returns the
     end-of-crushing state, the state at rest, the works, `t_string` (inf where n stays
     below 1), `string_work`, the string's flow-rule check, `failure` (the solves' codes,
     `PHASES`, as `_solve.phases.PhaseSolution` has them) and, with `n_history`,
     `history`: samples per phase and the state at rest, in the fields of `normal`'s
-    histories plus `axial_force`."""
+    histories plus `axial_force`. The solves' step budgets are `budget` times `_BUDGETS`."""
     solver = default_solver(solver)
     root = jnp.sqrt(phi**2 + 3.0)
     p = _Params(mu, phi, eta, 3.0 / (root + phi))
     first, second, string_in_first, locked = _beam_phases(
-        p, rtol=rtol, solver=solver, dense=bool(n_history)
+        p, rtol=rtol, solver=solver, dense=bool(n_history), budget=budget
     )
     reached, start = _string_start(
         first, second, string_in_first, p, cells=string_cells, solver=solver
@@ -461,7 +468,7 @@ def axial_stages(
         phi,
         jnp.where(reached, eta, 1.0),
         courant=string_courant,
-        max_steps=string_max_steps,
+        max_steps=_BUDGETS[2] * budget,
         n_history=n_history,
     )
     v_star = first.y_end.beam_velocity
