@@ -115,6 +115,30 @@ def test_axial_capacity_runs_the_axial_model():
     assert float(total) == pytest.approx(float(result.kinetic_energy), rel=1e-7)
 
 
+def test_axial_scene_whose_beam_locks_says_the_vehicle_crushes_to_rest():
+    # A 36 t lorry whose crush force barely exceeds the barrier's collapse force (phi =
+    # 1.008): the axial force stops the beam within 80 ms, and the vehicle crushes on to
+    # rest against it, at its crush force, which takes M v / P. The summary said it crushed
+    # "for the first" 78 ms.
+    from barrierjax.cli import format_summary, result_dict
+
+    barrier = bj.Barrier(105e3, 34.0, 60e3, axial_capacity=1.5e6)
+    lorry = bj.Scene(barrier, bj.Vehicle(mass=36000.0, crush_force=320e3), bj.Impact(80 / 3.6))
+    result = bj.simulate(lorry, n_history=20)
+    data = result_dict(lorry, result)
+    assert data["axial_ratio"] is not None and data["string_start_s"] is None
+    assert data["duration_s"] == pytest.approx(36000.0 * (80 / 3.6) / 320e3, rel=1e-9)
+    assert data["accelerative_phase_s"] < 0.1 * data["duration_s"]
+    assert "vehicle crushes to rest; the axial force stopped the beam at" in format_summary(data)
+    # Where the crushing ends first, the vehicle takes longer than M v / P to stop.
+    held = bj.Barrier(1e5, 34.0, 6e4, axial_capacity=1e6)
+    pickup = eqx.tree_at(lambda s: s.barrier, si_scene(), held)
+    riding = result_dict(pickup, bj.simulate(pickup, n_history=20))
+    assert riding["axial_ratio"] is not None and riding["string_start_s"] is None
+    assert riding["duration_s"] > 1.01 * 2270.0 * (40 / 3.6) / 450e3
+    assert "vehicle crushes for the first" in format_summary(riding)
+
+
 def test_axial_scene_that_reaches_the_plastic_string():
     # The default barrier held against axial motion (N0 = Fy A = 1.5 MN) at 100 km/h: N
     # reaches N0 after the crushing phase, and the string stretches to rest.

@@ -141,11 +141,22 @@ def _string_start(result, scales) -> float | None:
 def _phases(data: dict) -> str:
     crushing = f"{data['accelerative_phase_s'] * 1e3:.1f} ms"
     string = data["string_start_s"]
+    if string is None and data["axial_ratio"] is not None and _crushes_to_rest(data):
+        return f"vehicle crushes to rest; the axial force stopped the beam at {crushing}"
     if string is None:
         return f"vehicle crushes for the first {crushing}"
     if string <= data["accelerative_phase_s"]:
         return f"plastic string from {string * 1e3:.1f} ms, in the crushing phase"
     return f"crushing phase {crushing}; plastic string from {string * 1e3:.1f} ms"
+
+
+def _crushes_to_rest(data: dict) -> bool:
+    """Whether the vehicle crushed at its crush force from impact to rest, which then took
+    M v / P: with axial force, where the beam stopped first and locked (`axial_impact`).
+    Where its crushing ends before, the force on it falls below P and it stops later."""
+    i = data["inputs"]
+    stop = i["vehicle_mass_kg"] * i["speed_m_s"] / i["crush_force_N"]
+    return abs(data["duration_s"] - stop) <= 1e-6 * stop
 
 
 def format_summary(data: dict) -> str:
