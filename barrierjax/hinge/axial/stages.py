@@ -159,15 +159,20 @@ def _decelerating_field(sigma, y: _Decelerating, args) -> _Decelerating:
 
 
 # The step budgets of the three solves at `budget` 1: the crushing phase, the decelerative
-# phase and the string stage. The crushing phase needs steps in proportion to 1 / (phi - 1)
-# as phi -> 1 (its hinge equation is stiff in 1 / V0), about 5,000 at phi - 1 = 1e-3 for
-# heavy vehicles; the string of a heavy, fast vehicle a million or more.
+# phase and the string stage. An explicit solver's crushing phase needs steps in proportion
+# to 1 / (phi - 1) as phi -> 1 (the hinge moves at a rate over V0, and V0'(0) is
+# proportional to phi - 1), about 5,000 at phi - 1 = 1e-3 for heavy vehicles; the string of
+# a heavy, fast vehicle a million or more.
 _BUDGETS = (4096, 16384, 1_000_000)
 
 
-def _beam_phases(p: _Params, *, rtol, solver, dense, budget):
-    """The two phases of the beam stage, each ending where N reaches N0 if it does."""
+def _beam_phases(p: _Params, *, rtol, solver, dense, budget, stiff):
+    """The two phases of the beam stage, each ending where N reaches N0 if it does; with
+    `stiff`, the crushing phase in the implicit steps of diffrax's Kvaerno5."""
+    import diffrax  # (on first use: see `_solve.phases`)
+
     options = {"solver": solver, "rtol": rtol, "atol": 1e-3 * rtol, "dense": dense}
+    crushing = dict(options, solver=diffrax.Kvaerno5()) if stiff else options
     zero = jnp.zeros_like(p.mu)
     first = solve_phase(
         _accelerating_field,
@@ -178,7 +183,7 @@ def _beam_phases(p: _Params, *, rtol, solver, dense, budget):
         switch=lambda t, y, p: jnp.min(jnp.stack(_crushing_ends(t, y, p, rtol))),
         bisect=True,  # the least of three: kinks, and the velocities can meet tangentially
         max_steps=_BUDGETS[0] * budget,
-        **options,
+        **crushing,
     )
     a = first.y_end
     velocities_met, string_reached, beam_stopped = _crushing_ends(first.t_end, a, p, rtol)
@@ -446,18 +451,20 @@ def axial_stages(
     string_cells: int = 128,
     string_courant: float = 1.0,
     budget: int = 1,
+    stiff: bool = False,
 ) -> dict:
     """Both stages, speed-free (see the module docstring); `eta` = eta0 V^2. Returns the
     end-of-crushing state, the state at rest, the works, `t_string` (inf where n stays
     below 1), `string_work`, the string's flow-rule check, `failure` (the solves' codes,
     `PHASES`, as `_solve.phases.PhaseSolution` has them) and, with `n_history`,
     `history`: samples per phase and the state at rest, in the fields of `normal`'s
-    histories plus `axial_force`. The solves' step budgets are `budget` times `_BUDGETS`."""
+    histories plus `axial_force`. The solves' step budgets are `budget` times `_BUDGETS`;
+    with `stiff`, the crushing phase takes implicit steps (`_beam_phases`)."""
     solver = default_solver(solver)
     root = jnp.sqrt(phi**2 + 3.0)
     p = _Params(mu, phi, eta, 3.0 / (root + phi))
     first, second, string_in_first, locked = _beam_phases(
-        p, rtol=rtol, solver=solver, dense=bool(n_history), budget=budget
+        p, rtol=rtol, solver=solver, dense=bool(n_history), budget=budget, stiff=stiff
     )
     reached, start = _string_start(
         first, second, string_in_first, p, cells=string_cells, solver=solver
