@@ -56,7 +56,7 @@ def solve(model: str, s: dict):
 
 
 def probe(model: str, box: str, s: dict) -> list:
-    """One row per reason of failure (one row "solved" where none failed)."""
+    """One row per reason of failure (one row, reason "none", where none failed)."""
     n = len(s["mass_ratio"])
     start = time.perf_counter()
     try:
@@ -68,17 +68,15 @@ def probe(model: str, box: str, s: dict) -> list:
     by_reason = collections.defaultdict(list)
     for k, reason in failures.items():
         by_reason[reason.split(" at T = ")[0]].append(k)  # (without where it failed)
-    rows = [{"model": model, "box": box, "n": n, "failed": 0, "reason": "none", "s": seconds}]
+    row = {"model": model, "box": box, "n": n, "s": seconds}
+    rows = []
     for reason, ks in sorted(by_reason.items()):
         phi, mu = s["force_ratio"][ks] - 1.0, s["mass_ratio"][ks]
         rows.append(
-            {"model": model, "box": box, "n": n, "failed": len(ks), "reason": reason[:90],
-             "phi_lo": phi.min(), "phi_hi": phi.max(), "mu_lo": mu.min(), "mu_hi": mu.max(),
-             "s": seconds}  # fmt: skip
+            row | {"failed": len(ks), "reason": reason[:90], "phi_lo": phi.min(),
+                   "phi_hi": phi.max(), "mu_lo": mu.min(), "mu_hi": mu.max()}  # fmt: skip
         )
-    if len(rows) > 1:
-        rows = rows[1:]
-    return rows
+    return rows or [row | {"failed": 0, "reason": "none"}]
 
 
 def main():

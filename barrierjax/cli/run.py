@@ -141,9 +141,9 @@ def _string_start(result, scales) -> float | None:
 def _phases(data: dict) -> str:
     crushing = f"{data['accelerative_phase_s'] * 1e3:.1f} ms"
     string = data["string_start_s"]
-    if string is None and data["axial_ratio"] is not None and _crushes_to_rest(data):
-        return f"vehicle crushes to rest; the axial force stopped the beam at {crushing}"
     if string is None:
+        if data["axial_ratio"] is not None and _crushes_to_rest(data):
+            return f"vehicle crushes to rest; the axial force stopped the beam at {crushing}"
         return f"vehicle crushes for the first {crushing}"
     if string <= data["accelerative_phase_s"]:
         return f"plastic string from {string * 1e3:.1f} ms, in the crushing phase"
