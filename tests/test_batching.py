@@ -157,3 +157,38 @@ def test_rows_in_parts_splits_at_the_callers_part_size(monkeypatch):
     parts = batching.rows_in_parts(solve, rows, part_size=16)
     assert shapes == [(64, 2), (32, 2)]
     np.testing.assert_array_equal(parts, whole)
+
+
+def test_solved_again_solves_the_flagged_scenarios_alone_and_keeps_the_others():
+    # A toy solve whose "budget" is the attempt: a scenario completes where it is at most
+    # the attempt. The 2 x 3 batch's scenarios needing more are solved again, those alone:
+    # two together at attempt 2, then the one still short as a scalar at attempt 4.
+    calls = []
+
+    def solve(args, attempt):
+        (need,) = args
+        calls.append((need.shape, attempt))
+        done = need <= attempt
+        return {"value": need * 10.0 + attempt, "rows": jnp.stack([need, need], -1)}, done
+
+    need = jnp.asarray([[1.0, 2.0, 1.0], [3.0, 1.0, 1.0]])
+    larger = lambda attempt, args, done: 2 * attempt if attempt < 4 else None
+    again = lambda done: ~np.asarray(done)
+    result, done, last = batching.solved_again(solve, (need,), 1, larger, again)
+    assert calls == [((2, 3), 1), ((2,), 2), ((), 4)]
+    assert last == 4 and bool(np.all(done))
+    np.testing.assert_array_equal(result["value"], [[11.0, 22.0, 11.0], [34.0, 11.0, 11.0]])
+    np.testing.assert_array_equal(result["rows"], np.stack([need, need], -1))
+    # `larger` giving None ends it: the scenarios still flagged keep their last solve.
+    calls.clear()
+    stop = lambda attempt, args, done: None
+    result, done, last = batching.solved_again(solve, (need,), 1, stop, again)
+    assert calls == [((2, 3), 1)] and last == 1
+    np.testing.assert_array_equal(done, need <= 1)
+    # A scalar input is solved again as a scalar; a traced status ends after the first solve.
+    calls.clear()
+    assert batching.solved_again(solve, (jnp.asarray(3.0),), 1, larger, again)[2] == 4
+    assert calls == [((), 1), ((), 2), ((), 4)]
+    calls.clear()
+    jax.jit(lambda need: batching.solved_again(solve, (need,), 1, larger, again)[0])(need)
+    assert calls == [((2, 3), 1)]

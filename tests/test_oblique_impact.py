@@ -12,6 +12,7 @@ import pytest
 
 from barrierjax._solve.hermite import quintic_hermite
 from barrierjax.hinge import SolveError, normal_impact
+from barrierjax.hinge.oblique import api as oblique_api
 from barrierjax.hinge.oblique import moving_load, oblique_impact, results, transitions
 from barrierjax.hinge.oblique.phases import at_rest
 from barrierjax.hinge.response import kinetic_energy_balance
@@ -367,6 +368,33 @@ def test_a_spent_budget_under_grad_says_what_to_pass():
     exit_angle = lambda mu: oblique_impact(mu, 2.0, 0.3, 0.5, max_steps=16).exit_angle_deg
     with pytest.raises(SolveError, match=r"max_steps=16 was spent in the crushing phase"):
         jax.grad(exit_angle)(5.0)
+
+
+def test_a_spent_budget_grows_for_the_scenarios_that_spent_it_alone(monkeypatch):
+    # A heavy vehicle that barely yields the barrier (mu 100, phi - 1 = 3e-3) spends the
+    # first budget, 1,024 steps, while it crushes (explicit steps in proportion to
+    # 1 / (phi - 1)); the light ones beside it do not. It alone is solved again, by the
+    # scalar program with 4,096: its answer is its own scalar solve's with that budget, and
+    # the others' are those of their batch without it (the same padded program).
+    light, heavy = [(1.0, 2.0, 0.3, 0.5), (2.0, 3.0, 0.4, 0.2)], (100.0, 1.003, 0.3, 0.5)
+    batches = []
+
+    def batch_solved(mu, *args, max_steps, **options):
+        batches.append((mu.shape, max_steps))
+        return api_batch_solved(mu, *args, max_steps=max_steps, **options)
+
+    api_batch_solved = oblique_api._oblique_batch_solved
+    monkeypatch.setattr(oblique_api, "_oblique_batch_solved", batch_solved)
+    solve = lambda cases: oblique_impact(*(jnp.asarray(x) for x in zip(*cases)), rtol=1e-6)
+    with pytest.raises(SolveError, match="max_steps=1024 was spent in the crushing phase"):
+        oblique_impact(*heavy, rtol=1e-6, max_steps=1024)
+    batch = solve([*light, heavy])
+    assert batches == [((4,), 1024)]
+    alone = oblique_impact(*heavy, rtol=1e-6, max_steps=4096)
+    without = solve([*light, light[1]])
+    same = lambda rows, expected: np.testing.assert_array_equal(np.asarray(rows), expected)
+    jax.tree.map(lambda b, a: same(b[2], a), batch, alone)
+    jax.tree.map(lambda b, w: same(b[:2], w[:2]), batch, without)
 
 
 def test_float32_defaults_to_a_tolerance_it_can_meet():

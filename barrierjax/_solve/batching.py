@@ -8,6 +8,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 
 def sorted_chunks(solve, inputs: tuple, key, batch_size: int):
@@ -29,6 +30,57 @@ def sorted_chunks(solve, inputs: tuple, key, batch_size: int):
     solved = jax.lax.map(lambda x: solve(*x), sorted_inputs, batch_size=size)
     unsort = jnp.argsort(order)
     return jax.tree.map(lambda leaf: leaf[unsort], solved)
+
+
+def solved_again(solve, args: tuple, first, larger, again):
+    """`solve(args, first)`, a (result, status) pair over the scenarios of `args` (inputs
+    of one shape); where a concrete status flags scenarios to solve again (`again(status)`:
+    a boolean per scenario), those scenarios solved again, alone, by `solve(their args,
+    attempt)` with `attempt = larger(the attempt before, their args, their status)` (flat),
+    until none is flagged or `larger` gives None. The other scenarios keep the results of
+    the solve before: one slow scenario no longer costs every scenario of its batch a
+    second solve. One scenario alone is solved as a scalar (the scalar solve's program
+    compiles in a fraction of a batch's time). Returns (result, status, the last attempt);
+    a traced status (under a caller's `jit`, `vmap` or `grad`) ends it after the first
+    solve."""
+    result, status = solve(args, first)
+    shape, attempt = args[0].shape, first
+    rows = np.arange(math.prod(shape))
+    part_args, part_status = args, status
+    while not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(part_status)):
+        flagged = np.flatnonzero(np.asarray(again(part_status)))
+        if flagged.size == 0:
+            break
+        part_shape = part_args[0].shape
+        part_args = tuple(jnp.ravel(a)[flagged] for a in part_args)
+        bigger = larger(attempt, part_args, _flat_rows(part_status, part_shape, flagged))
+        if bigger is None:
+            break
+        attempt = bigger
+        rows = rows[flagged]
+        if rows.size == 1:
+            part = solve(tuple(a[0] for a in part_args), attempt)
+            part = part if not shape else jax.tree.map(lambda leaf: leaf[None], part)
+        else:
+            part = solve(part_args, attempt)
+        put = lambda whole, new: _rows_replaced(whole, shape, rows, new)
+        result, status = part if not shape else jax.tree.map(put, (result, status), part)
+        part_status = part[1]
+    return result, status, attempt
+
+
+def _flat_rows(tree, shape, rows):
+    """Each leaf of `tree` (leading axes: the scenarios' `shape`) at the flat indices
+    `rows`."""
+    flat = lambda leaf: leaf.reshape((math.prod(shape), *leaf.shape[len(shape) :]))[rows]
+    return jax.tree.map(flat, tree)
+
+
+def _rows_replaced(whole, shape, rows, part):
+    """`whole`, whose leading axes are the scenarios' `shape`, with the scenarios at the
+    flat indices `rows` replaced by `part`'s (leading axis: those scenarios)."""
+    flat = whole.reshape((math.prod(shape), *whole.shape[len(shape) :]))
+    return flat.at[rows].set(part).reshape(whole.shape)
 
 
 # The quantum of the models' padded sizes: above it, a batch grows to whole multiples of it,

@@ -3,15 +3,13 @@
 into the `NormalImpact` of report 3.2."""
 
 import functools
-import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.core import Tracer
 
 from ... import _checks
-from ..._solve.batching import solve_padded, sorted_chunks
+from ..._solve.batching import solve_padded, solved_again, sorted_chunks
 from ..._solve.phases import SOLVED, STEPS_SPENT, raise_failures
 from ..._solve.sensitivity import forward_jacobian_jvp
 from ...compilation_cache import stored_program
@@ -143,14 +141,14 @@ def axial_impact(
         string_courant=float(string_courant),
     )
 
-    def solve(args, budget, stiff):
-        again = {"budget": budget, "stiff": stiff}
+    def solve(args, attempt):
+        budgets = {"budget": attempt[0], "stiff": attempt[1]}
         if args[0].ndim == 0:
-            return _axial_impact(*args, rtol, **options, **again)
-        padded = lambda *x: _axial_impact(*x[:-1], rtol, **options, **again)
+            return _axial_impact(*args, rtol, **options, **budgets)
+        padded = lambda *x: _axial_impact(*x[:-1], rtol, **options, **budgets)
         return solve_padded(padded, args, _CHUNK)
 
-    result, failures = _solved_again_where_spent(solve, args)
+    result, failures, _ = solved_again(solve, args, _ATTEMPTS[0], _next_attempt, _spent)
     return raise_failures("axial_impact", result, failures, PHASES)
 
 
@@ -165,32 +163,15 @@ def axial_impact(
 _ATTEMPTS = ((1, False), (4, False), (16, True))
 
 
-def _solved_again_where_spent(solve, args):
-    """`solve(args, *_ATTEMPTS[0])`, and where a concrete solve spent a step budget, those
-    scenarios solved again by `solve(their args, *attempt)` with each later attempt in
-    turn; the other scenarios' results are those of the solve before."""
-    result, failures = solve(args, *_ATTEMPTS[0])
-    shape = args[0].shape
-    for attempt in _ATTEMPTS[1:]:
-        if isinstance(failures, Tracer):
-            break
-        spent = np.flatnonzero(np.any(np.asarray(failures) == STEPS_SPENT, axis=-1))
-        if spent.size == 0:
-            break
-        if not shape:
-            result, failures = solve(args, *attempt)
-            continue
-        again = tuple(jnp.ravel(a)[spent] for a in args)
-        put = lambda whole, part: _rows_replaced(whole, shape, spent, part)
-        result, failures = jax.tree.map(put, (result, failures), solve(again, *attempt))
-    return result, failures
+def _next_attempt(attempt, args, failures):
+    """The attempt after `attempt`, or None after the last."""
+    later = _ATTEMPTS.index(attempt) + 1
+    return _ATTEMPTS[later] if later < len(_ATTEMPTS) else None
 
 
-def _rows_replaced(whole, shape, rows, part):
-    """`whole`, whose leading axes are the scenarios' `shape`, with the scenarios at the
-    flat indices `rows` replaced by `part`'s (leading axis: those scenarios)."""
-    flat = whole.reshape((math.prod(shape), *whole.shape[len(shape):]))
-    return flat.at[rows].set(part).reshape(whole.shape)
+def _spent(failures):
+    """Whether each scenario's solve spent a step budget (`failures`: its stages' codes)."""
+    return np.any(np.asarray(failures) == STEPS_SPENT, axis=-1)
 
 
 # The batch is padded (`padded_size`) to the next power of two up to a chunk, then to whole

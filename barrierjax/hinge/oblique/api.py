@@ -11,7 +11,7 @@ import numpy as np
 from jax.core import Tracer
 
 from ... import _checks, _xla_flags
-from ..._solve.batching import PADDING_QUANTUM, solve_padded
+from ..._solve.batching import PADDING_QUANTUM, solve_padded, solved_again
 from ..._solve.phases import SolveError
 from ..._solve.queue import solve_queued
 from ..._solve.recorded_rk import Carry
@@ -71,49 +71,59 @@ def _check_options(rtol, max_steps):
 _FIRST_BUDGET, _LARGEST_BUDGET = 1024, 65536
 
 
-def _within_budget(solve, max_steps, larger, *, moving_load=False):
-    """`solve(budget)`'s result, where `solve` returns (result, `Outcome`).
+def _within_budget(solve, args, max_steps, grow, *, moving_load=False):
+    """`solve(args, budget)`'s result, where `solve` returns (result, `Outcome`).
 
     Traced inside a caller's `jit`, `vmap` or `grad`, failures are run-time errors
     (`raise_failures`). Otherwise they raise here, in one line that says what to pass; and
-    with `max_steps=None` a spent budget grows by itself, to `larger(budget, outcome)`
-    (a new compilation each time), up to `_LARGEST_BUDGET`."""
+    with `max_steps=None` the scenarios that spent their budget are solved again, alone
+    (`solved_again`), with `grow(budget, their args, their outcome)` (a new compilation
+    each time), up to `_LARGEST_BUDGET`."""
     name = "moving_load" if moving_load else "oblique_impact"
-    budget = _FIRST_BUDGET if max_steps is None else int(max_steps)
-    while True:
-        result, outcome = solve(budget)
+
+    def solve_read(args, budget):
+        result, outcome = solve(args, budget)
         # (Under `jax.grad` outside a `jit` the outcome's times carry tangents, its flags
         # none: read without them, it is concrete there.)
-        outcome = jax.lax.stop_gradient(outcome)
-        if isinstance(outcome.time, Tracer):
-            return raise_failures(result, outcome, moving_load)
-        overtaken = np.flatnonzero(np.asarray(outcome.overtaken).ravel())
-        if overtaken.size:
-            reasons = {int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in overtaken}
-            raise SolveError.of(reasons, _batch_size(outcome))
-        phases, times = np.asarray(outcome.phase).ravel(), np.asarray(outcome.time).ravel()
-        stalled = np.flatnonzero(np.asarray(outcome.stalled).ravel())
-        if stalled.size:
-            reasons = {
-                int(k): f"{name}: in {phase_name(int(phases[k]), moving_load)} at "
-                f"T = {times[k]:.4g}, {STALLED_MESSAGE}"
-                for k in stalled
-            }
-            raise SolveError.of(reasons, _batch_size(outcome))
-        spent = ~np.asarray(outcome.complete).ravel()
-        if not spent.any():
-            return result
-        suggestion = larger(budget, outcome)
-        if max_steps is None and suggestion <= _LARGEST_BUDGET:
-            budget = suggestion
-            continue
+        return result, jax.lax.stop_gradient(outcome)
+
+    def larger(budget, args, outcome):
+        budget = grow(budget, args, outcome)
+        return budget if max_steps is None and budget <= _LARGEST_BUDGET else None
+
+    def spent(outcome):
+        failed = np.asarray(outcome.overtaken) | np.asarray(outcome.stalled)
+        return ~np.asarray(outcome.complete) & ~failed
+
+    first = _FIRST_BUDGET if max_steps is None else int(max_steps)
+    result, outcome, budget = solved_again(solve_read, args, first, larger, spent)
+    if isinstance(outcome.time, Tracer):
+        return raise_failures(result, outcome, moving_load)
+    overtaken = np.flatnonzero(np.asarray(outcome.overtaken).ravel())
+    if overtaken.size:
+        reasons = {int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in overtaken}
+        raise SolveError.of(reasons, _batch_size(outcome))
+    phases, times = np.asarray(outcome.phase).ravel(), np.asarray(outcome.time).ravel()
+    stalled = np.flatnonzero(np.asarray(outcome.stalled).ravel())
+    if stalled.size:
         reasons = {
-            int(k): f"{name}: the step budget max_steps={budget} was spent in "
-            f"{phase_name(int(phases[k]), moving_load)} at T = {times[k]:.4g}: "
-            f"pass max_steps={suggestion} or more"
-            for k in np.flatnonzero(spent)
+            int(k): f"{name}: in {phase_name(int(phases[k]), moving_load)} at "
+            f"T = {times[k]:.4g}, {STALLED_MESSAGE}"
+            for k in stalled
         }
         raise SolveError.of(reasons, _batch_size(outcome))
+    spent = np.flatnonzero(~np.asarray(outcome.complete).ravel())
+    if spent.size == 0:
+        return result
+    rows = lambda tree: jax.tree.map(lambda leaf: jnp.ravel(leaf)[spent], tree)
+    suggestion = grow(budget, rows(args), rows(outcome))
+    reasons = {
+        int(k): f"{name}: the step budget max_steps={budget} was spent in "
+        f"{phase_name(int(phases[k]), moving_load)} at T = {times[k]:.4g}: "
+        f"pass max_steps={suggestion} or more"
+        for k in spent
+    }
+    raise SolveError.of(reasons, _batch_size(outcome))
 
 
 def _batch_size(outcome: Outcome) -> int | None:
@@ -154,8 +164,10 @@ def oblique_impact(
       cheapest).
     - `max_steps`: step budget of the whole run: every attempted step, and one for the
       start of each phase and segment (also the size of the recorded history). `None`:
-      1024, and where that is spent (heavy vehicles, mu above about 50), four times as
-      many, again and again up to 65536 (each a new compilation). A spent budget raises a
+      1024, and where that is spent (heavy vehicles, mu above about 50), the scenarios
+      that spent it are solved again, alone, with four times as many, again and again up
+      to 65536 (each a new compilation; one scenario by the scalar program, quicker to
+      compile, and the batch's others left as solved). A spent budget raises a
       one-line `SolveError` (a `RuntimeError`) that says what to pass; inside a caller's
       `jit`, `vmap` or `grad` the budget cannot grow and a spent one is a run-time error.
 
@@ -180,7 +192,7 @@ def oblique_impact(
     yields, inputs = _lanes(mu, phi, vn, vh, friction)
     rtol = _tolerance(rtol, inputs[0].dtype)
 
-    def solve(budget):
+    def solve(inputs, budget):
         options = {"max_steps": budget, "n_history": n_history, "n_x": _N_X}
         # (XLA's options are for a program compiled by itself, not inside a caller's.)
         traced = any(isinstance(x, Tracer) for x in inputs)
@@ -197,7 +209,7 @@ def oblique_impact(
         padded = lambda *x: differentiable(*x[:-1], rtol, x[-1])
         return solve_padded(padded, inputs, PADDING_QUANTUM)
 
-    result = _within_budget(solve, max_steps, lambda budget, _: 4 * budget)
+    result = _within_budget(solve, inputs, max_steps, lambda budget, *_: 4 * budget)
     result = _with_rigid_barriers(result, yields, mu, phi, vn, vh, friction, n_history=n_history)
     return _energy_closed(result, mu, vn, vh, rtol)
 
@@ -375,13 +387,14 @@ def moving_load(
     args = jnp.broadcast_arrays(phi, vh, t_end)
     rtol = _tolerance(rtol, args[0].dtype)
 
-    def larger(budget, outcome):
+    def larger(budget, args, outcome):
         """The budget in proportion to the time left, with a quarter to spare."""
-        reached = np.asarray(outcome.time / args[2])[~np.asarray(outcome.complete)]
+        reached = np.asarray(outcome.time / args[2])
         return _power_of_two_above(1.25 * budget / max(float(np.min(reached)), 1e-3))
 
     return _within_budget(
-        lambda budget: _moving_load(*args, rtol, max_steps=budget, n_history=n_history),
+        lambda args, budget: _moving_load(*args, rtol, max_steps=budget, n_history=n_history),
+        args,
         max_steps,
         larger,
         moving_load=True,
