@@ -362,6 +362,18 @@ def test_spent_step_budget_grows_or_says_what_to_pass():
     assert float(grown.s1) == pytest.approx(phi - math.sqrt(phi**2 - 1.0), rel=1e-6)
 
 
+def test_a_budget_grows_under_grad():
+    # The moving load's budget grows in proportion to the time left, t_end among its
+    # inputs: under `grad` outside a `jit` it read them with their tangents and raised
+    # JAX's TracerArrayConversionError. At the steady state S1 = phi - (phi^2 - 1)^1/2
+    # ((3.3.18)), whatever t_end.
+    phi, vh, t_end = 2.0, 1.0, 360.0
+    s1 = lambda *x: moving_load(*x, n_history=2).s1
+    d_phi, d_t_end = jax.grad(s1, argnums=(0, 2))(phi, vh, t_end)
+    assert float(d_phi) == pytest.approx(1.0 - phi / math.sqrt(phi**2 - 1.0), rel=1e-5)
+    assert abs(float(d_t_end)) < 1e-9
+
+
 def test_a_spent_budget_under_grad_says_what_to_pass():
     # Outside a `jit`, the outcome's times carry tangents under `grad`: its message read
     # them as numbers and raised JAX's TracerArrayConversionError instead.

@@ -84,11 +84,11 @@ def _within_budget(solve, args, max_steps, grow, *, moving_load=False):
     def solve_read(args, budget):
         result, outcome = solve(args, budget)
         # (Under `jax.grad` outside a `jit` the outcome's times carry tangents, its flags
-        # none: read without them, it is concrete there.)
+        # none: read without them, it is concrete there; so are the inputs `grow` reads.)
         return result, jax.lax.stop_gradient(outcome)
 
     def larger(budget, args, outcome):
-        budget = grow(budget, args, outcome)
+        budget = grow(budget, jax.lax.stop_gradient(args), outcome)
         return budget if max_steps is None and budget <= _LARGEST_BUDGET else None
 
     def spent(outcome):
@@ -116,7 +116,7 @@ def _within_budget(solve, args, max_steps, grow, *, moving_load=False):
     if spent.size == 0:
         return result
     rows = lambda tree: jax.tree.map(lambda leaf: jnp.ravel(leaf)[spent], tree)
-    suggestion = grow(budget, rows(args), rows(outcome))
+    suggestion = grow(budget, rows(jax.lax.stop_gradient(args)), rows(outcome))
     reasons = {
         int(k): f"{name}: the step budget max_steps={budget} was spent in "
         f"{phase_name(int(phases[k]), moving_load)} at T = {times[k]:.4g}: "
