@@ -80,11 +80,12 @@ def pytest_collection_modifyitems(items):
 def pytest_sessionfinish(session):
     """Free JAX's caches and collect before a worker reports its end, and freeze what is
     left out of later collections. Once told to stop, a worker (execnet) that has not
-    finished within 5 s sends itself SIGINT; pytest's check for unraisable exceptions then
-    still ran a full collection over everything the caches held (1.9 million objects and
-    1.0 s after `tests/test_oblique_impact.py` alone, more after a worker's share of the
-    suite), and the KeyboardInterrupt, landing in hypothesis's gc callback, was printed
-    as a `PytestUnraisableExceptionWarning` at the end of CI's output."""
+    finished within 5 s sends itself SIGINT. Its last collections (pytest's check for
+    unraisable exceptions runs one) went over everything the caches held: 1.9 million
+    objects and 1.0 s after `tests/test_oblique_impact.py` alone, more after a worker's
+    share of the suite. In most CI runs the KeyboardInterrupt then landed in hypothesis's
+    gc callback and was printed as a `PytestUnraisableExceptionWarning` at the end of the
+    output."""
     jax.clear_caches()
     gc.collect()
     gc.freeze()
