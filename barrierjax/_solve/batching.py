@@ -69,18 +69,21 @@ def solved_again(solve, args: tuple, first, larger, again):
     return result, status, attempt
 
 
+def _scenarios_flat(leaf, shape):
+    """`leaf`, whose leading axes are the scenarios' `shape`, with those axes as one."""
+    return leaf.reshape((math.prod(shape), *leaf.shape[len(shape) :]))
+
+
 def _flat_rows(tree, shape, rows):
     """Each leaf of `tree` (leading axes: the scenarios' `shape`) at the flat indices
     `rows`."""
-    flat = lambda leaf: leaf.reshape((math.prod(shape), *leaf.shape[len(shape) :]))[rows]
-    return jax.tree.map(flat, tree)
+    return jax.tree.map(lambda leaf: _scenarios_flat(leaf, shape)[rows], tree)
 
 
 def _rows_replaced(whole, shape, rows, part):
     """`whole`, whose leading axes are the scenarios' `shape`, with the scenarios at the
     flat indices `rows` replaced by `part`'s (leading axis: those scenarios)."""
-    flat = whole.reshape((math.prod(shape), *whole.shape[len(shape) :]))
-    return flat.at[rows].set(part).reshape(whole.shape)
+    return _scenarios_flat(whole, shape).at[rows].set(part).reshape(whole.shape)
 
 
 # The quantum of the models' padded sizes: above it, a batch grows to whole multiples of it,
