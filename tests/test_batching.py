@@ -162,7 +162,8 @@ def test_rows_in_parts_splits_at_the_callers_part_size(monkeypatch):
 def test_solved_again_solves_the_flagged_scenarios_alone_and_keeps_the_others():
     # A toy solve whose "budget" is the attempt: a scenario completes where it is at most
     # the attempt. The 2 x 3 batch's scenarios needing more are solved again, those alone:
-    # two together at attempt 2, then the one still short as a scalar at attempt 4.
+    # two together at attempt 2 (padded to 16 rows, the program of every few), then the one
+    # still short as a scalar at attempt 4.
     calls = []
 
     def solve(args, attempt):
@@ -175,10 +176,18 @@ def test_solved_again_solves_the_flagged_scenarios_alone_and_keeps_the_others():
     larger = lambda attempt, args, done: 2 * attempt if attempt < 4 else None
     again = lambda done: ~np.asarray(done)
     result, done, last = batching.solved_again(solve, (need,), 1, larger, again)
-    assert calls == [((2, 3), 1), ((2,), 2), ((), 4)]
+    assert calls == [((2, 3), 1), ((16,), 2), ((), 4)]
     assert last == 4 and bool(np.all(done))
     np.testing.assert_array_equal(result["value"], [[11.0, 22.0, 11.0], [34.0, 11.0, 11.0]])
     np.testing.assert_array_equal(result["rows"], np.stack([need, need], -1))
+    # Five flagged are the same program as two; more than 16 are solved at their number.
+    for flagged, shape in ((5, (16,)), (18, (18,))):
+        calls.clear()
+        need = jnp.ones(40).at[7 : 7 + flagged].set(2.0)
+        result, done, _ = batching.solved_again(solve, (need,), 1, larger, again)
+        assert calls == [((40,), 1), (shape, 2)] and bool(np.all(done))
+        np.testing.assert_array_equal(result["value"], np.where(need == 2.0, 22.0, 11.0))
+    need = jnp.asarray([[1.0, 2.0, 1.0], [3.0, 1.0, 1.0]])
     # `larger` giving None ends it: the scenarios still flagged keep their last solve.
     calls.clear()
     stop = lambda attempt, args, done: None

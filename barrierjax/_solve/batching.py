@@ -40,9 +40,10 @@ def solved_again(solve, args: tuple, first, larger, again):
     until none is flagged or `larger` gives None. The other scenarios keep the results of
     the solve before: one slow scenario no longer costs every scenario of its batch a
     second solve. One scenario alone is solved as a scalar (the scalar solve's program
-    compiles in a fraction of a batch's time). Returns (result, status, the last attempt);
-    a traced status (under a caller's `jit`, `vmap` or `grad`) ends it after the first
-    solve."""
+    compiles in a fraction of a batch's time); more are padded with copies of their last to
+    at least `_SMALLEST_AGAIN` rows, so that the few each chunk of a sweep flags share one
+    program an attempt. Returns (result, status, the last attempt); a traced status (under
+    a caller's `jit`, `vmap` or `grad`) ends it after the first solve."""
     result, status = solve(args, first)
     shape, attempt = args[0].shape, first
     rows = np.arange(math.prod(shape))
@@ -62,11 +63,23 @@ def solved_again(solve, args: tuple, first, larger, again):
             part = solve(tuple(a[0] for a in part_args), attempt)
             part = part if not shape else jax.tree.map(lambda leaf: leaf[None], part)
         else:
-            part = solve(part_args, attempt)
+            part = solve(_at_least(part_args, _SMALLEST_AGAIN), attempt)
+            part = jax.tree.map(lambda leaf: leaf[: rows.size], part)
         put = lambda whole, new: _rows_replaced(whole, shape, rows, new)
         result, status = part if not shape else jax.tree.map(put, (result, status), part)
         part_status = part[1]
     return result, status, attempt
+
+
+# The fewest rows a batch solved again has: 2 to 16 flagged scenarios are one program (a
+# model's batch pads them to a power of two, a program each), for lanes that cost little
+# beside a loop's own work at that width.
+_SMALLEST_AGAIN = 16
+
+
+def _at_least(args: tuple, rows: int) -> tuple:
+    """`args` (one leading axis of scenarios) padded to `rows` with copies of their last."""
+    return _padded(args, max(rows, args[0].shape[0]))[:-1]
 
 
 def _scenarios_flat(leaf, shape):
