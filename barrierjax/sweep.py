@@ -145,7 +145,7 @@ def result_columns(result: Result, n: int) -> dict[str, np.ndarray]:
     return columns
 
 
-def _solver(scene: Scene, varies: list[Vary]) -> Callable:
+def _solver(scene: Scene, varies: list[Vary], rtol: float | None = None) -> Callable:
     """The batch's solve. On one device, `simulate` on the chunk's concrete arrays: the
     models' own entry points, whose programs the command line keeps on disk
     (`compilation_cache.stored_program`), run in parts on a CPU and grow a spent step
@@ -158,7 +158,7 @@ def _solver(scene: Scene, varies: list[Vary]) -> Callable:
 
     def solve(values):
         batch = _with_values(scene, varies, values)
-        return simulate(batch, n_history=0, oblique=True if oblique else None)
+        return simulate(batch, n_history=0, oblique=True if oblique else None, rtol=rtol)
 
     if jax.device_count() == 1:
         solved = lambda values: solve(jnp.asarray(values))  # (result_columns: to NumPy)
@@ -173,7 +173,8 @@ def _solver(scene: Scene, varies: list[Vary]) -> Callable:
 class Sweep:
     """A sweep: what it varies, how many scenarios and how drawn, in chunks of `chunk`;
     with `skip_failures`, a scenario the model cannot solve is a row of nulls with its
-    error in the column `failure` (else it ends the sweep)."""
+    error in the column `failure` (else it ends the sweep); `rtol`, the impact models'
+    relative tolerance (None: each model's default)."""
 
     varies: list[Vary]
     samples: int
@@ -181,6 +182,7 @@ class Sweep:
     distribution: str = "uniform"
     chunk: int = 65536
     skip_failures: bool = False
+    rtol: float | None = None
 
     def manifest(self, scene) -> dict:
         if isinstance(scene, Scene):
@@ -194,7 +196,8 @@ class Sweep:
             digest.update(np.asarray(x, np.float64).tobytes())
         return {"vary": [[v.key, v.low, v.high] for v in self.varies], "samples": self.samples,
                 "seed": self.seed, "distribution": self.distribution, "chunk": self.chunk,
-                "skip_failures": self.skip_failures, "scene": digest.hexdigest()}  # fmt: skip
+                "skip_failures": self.skip_failures, "scene": digest.hexdigest()} | (
+                {} if self.rtol is None else {"rtol": self.rtol})  # fmt: skip
 
 
 def parts_folder(out: Path) -> Path:
@@ -223,6 +226,14 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
             raise SweepError(f"--vary {key}: given twice (one range a key)")
     if isinstance(scene, Scene):
         check_ranges(scene, sweep.varies)
+    if sweep.rtol is not None:
+        if not isinstance(scene, Scene):
+            raise SweepError(
+                "--rtol: a barrier-system scene steps at its own fixed time step; the "
+                "tolerance is the impact models' (report 3.2-3.4)"
+            )
+        if not 0.0 < sweep.rtol < 1.0:
+            raise SweepError(f"--rtol must be in (0, 1); got {sweep.rtol:g}")
     values = draw(sweep.varies, sweep.samples, sweep.seed, sweep.distribution)
     parts = parts_folder(out)
     manifest = sweep.manifest(scene)
@@ -233,7 +244,7 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
     import pyarrow.parquet as pq
 
     if isinstance(scene, Scene):
-        solve = _solver(scene, sweep.varies)
+        solve = _solver(scene, sweep.varies, sweep.rtol)
     else:
         from .system.sweep import system_solver
 

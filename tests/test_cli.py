@@ -372,6 +372,7 @@ def test_console_script_second_run_neither_traces_nor_compiles_the_models(tmp_pa
 
 
 OBLIQUE_SCENE = Path(__file__).resolve().parent.parent / "examples" / "oblique_scene.toml"
+MASH_3_11 = OBLIQUE_SCENE.with_name("mash_3_11.toml")
 # A vehicle that leaves the barrier while it still moves (separation, issue 3 item 2), in
 # units where L = 2, P_b = 4, t0 = 1: mu = 5, phi = 2, V_N = 0.5, V_H = 2.
 SEPARATING = """
@@ -439,6 +440,26 @@ def test_run_oblique_scene_writes_plots(capsys, tmp_path):
     paths = plotting.write_run_plots(separating, tmp_path / "separating")
     assert [p.name for p in paths] == names
     assert all(p.stat().st_size > 20_000 for p in paths)
+
+    # At another tolerance (a traced one: the same programs), the scene's own answer there.
+    status, out, err = run(capsys, "run", str(OBLIQUE_SCENE), "--json", "--no-plots",
+                           "--rtol", "1e-4")  # fmt: skip
+    assert status == 0, err
+    loose = bj.simulate(load_scene(OBLIQUE_SCENE), rtol=1e-4)
+    exit_angle = json.loads(out)["exit_angle_deg"]
+    assert exit_angle == pytest.approx(float(loose.exit_angle_deg), rel=1e-9)
+    assert exit_angle != pytest.approx(float(result.exit_angle_deg), rel=1e-9)
+
+
+def test_run_rtol_is_checked_and_applies_to_impact_scenes_only(capsys):
+    for args, message in [
+        (["--rtol", "0"], "--rtol must be in (0, 1); got 0"),
+        (["cantilever-1", "--rtol", "1e-6"], "--rtol applies to an impact scene; a cantilever"),
+        ([str(MASH_3_11), "--rtol", "1e-6"], "--rtol applies to an impact scene (report 3.2"),
+    ]:
+        status, out, err = run(capsys, "run", *args)
+        lines = err.strip().splitlines()
+        assert status == 2 and len(lines) == 1 and lines[0].startswith(f"error: {message}"), err
 
 
 def test_normal_history_has_the_vehicle_path():

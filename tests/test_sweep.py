@@ -1,6 +1,8 @@
 """`barrierjax sweep` (`barrierjax.sweep`): rows equal single runs, an interrupted sweep
 resumed gives the same file, the distributions, and bad sweeps refused in one line."""
 
+from pathlib import Path
+
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -9,6 +11,9 @@ from barrierjax import Impact, Scene, simulate
 from barrierjax.cli import main
 from barrierjax.scene_file import default_scene
 from barrierjax.sweep import Sweep, SweepError, draw, parse_vary, parts_folder, run_sweep
+
+
+_MASH_3_11 = str(Path(__file__).parents[1] / "examples" / "mash_3_11.toml")
 
 
 def _varies(*texts):
@@ -44,6 +49,21 @@ def test_an_oblique_sweep_over_angles_equals_single_runs(tmp_path):
                        n_history=0)  # fmt: skip
         assert columns["exit_angle_deg"][i] == pytest.approx(float(one.exit_angle_deg), rel=1e-9)
     assert (tmp_path / "o.csv").read_text().startswith('"impact.angle"')
+
+
+def test_an_oblique_sweep_solves_at_the_tolerance_it_is_given(tmp_path):
+    # (The shapes of the test above: its programs run again, at another rtol, a traced one.)
+    varies = _varies("impact.angle=20:40")
+    sweep = Sweep(varies, 3, seed=1, chunk=2, rtol=1e-4)
+    columns = run_sweep(default_scene(), sweep, tmp_path / "o.csv")
+    base = default_scene()
+    for i, angle in enumerate(columns["impact.angle"]):
+        scene = Scene(base.barrier, base.vehicle, Impact(base.impact.speed, angle))
+        loose, fine = (float(simulate(scene, n_history=0, rtol=rtol).exit_angle_deg)
+                       for rtol in (1e-4, None))  # fmt: skip
+        assert columns["exit_angle_deg"][i] == pytest.approx(loose, rel=1e-9)
+        assert columns["exit_angle_deg"][i] != pytest.approx(fine, rel=1e-9)
+        assert columns["exit_angle_deg"][i] == pytest.approx(fine, rel=1e-3)
 
 
 def test_a_second_oblique_sweep_loads_the_model_it_kept(tmp_path):
@@ -90,6 +110,9 @@ def test_an_interrupted_sweep_resumed_gives_the_same_file(normal_sweep, tmp_path
         run_sweep(default_scene(), sweep, out)
     with pytest.raises(SweepError, match="different sweep"):
         run_sweep(default_scene(), Sweep(sweep.varies, 6, 3, chunk=4), out, resume=True)
+    with pytest.raises(SweepError, match="different sweep"):  # another tolerance
+        run_sweep(default_scene(), Sweep(sweep.varies, 5, 3, chunk=4, rtol=1e-6), out,
+                  resume=True)  # fmt: skip
     run_sweep(default_scene(), sweep, out, resume=True)
     whole = tmp_path / "whole.parquet"
     run_sweep(default_scene(), sweep, whole)
@@ -123,6 +146,12 @@ def test_the_distributions_draw_within_the_range():
             "--vary impact.speed: given twice",
         ),
         (["--vary", "impact.speed=1:2", "--out", "rows.txt"], "--out rows.txt: name a .parquet"),
+        (["--vary", "impact.speed=1:2", "--rtol", "0"], "--rtol must be in (0, 1); got 0"),
+        (["--vary", "impact.speed=1:2", "--rtol", "2"], "--rtol must be in (0, 1); got 2"),
+        (
+            [_MASH_3_11, "--vary", "barrier.post_spacing=1.5:2", "--rtol", "1e-6"],
+            "--rtol: a barrier-system scene steps at its own fixed time step",
+        ),
         # A range is put through the scene's rules at both ends before anything is drawn.
         (
             ["--vary", "impact.friction=-1:1"],

@@ -154,6 +154,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="scene file (default: the built-in default scene)",
     )
     run.add_argument("--no-plots", action="store_true", help="do not write plots")
+    run.add_argument("--rtol", type=float, metavar="R",
+                     help="the impact model's relative tolerance (default: the model's, "
+                     "1e-8 where it integrates in time): a scene run again at a smaller one "
+                     "shows how far its results are from converged")  # fmt: skip
     beam = run.add_argument_group(
         "cantilever-N",
         "'barrierjax run cantilever-1' (-2, -3) runs the report's Example 1 (2, 3) of 4.3, "
@@ -292,6 +296,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="carry on an interrupted sweep (its chunks in FILE.parts/)")  # fmt: skip
     sweep.add_argument("--chunk", type=int, default=65536, metavar="N",
                        help="scenarios solved at once (default 65536)")  # fmt: skip
+    sweep.add_argument("--rtol", type=float, metavar="R",
+                       help="the impact models' relative tolerance (default: each model's, "
+                       "1e-8 where they integrate in time); looser runs faster: "
+                       "benchmarks/README.md, 'Tolerance and speed', measures what each "
+                       "costs and how far it moves the results")  # fmt: skip
     sweep.add_argument("--skip-failures", action="store_true",
                        help="a scenario the model cannot solve becomes a row of nulls with "
                        "its error in the column failure (default: it ends the sweep)")  # fmt: skip

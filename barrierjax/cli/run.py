@@ -242,6 +242,12 @@ def _scene_error(error: Exception) -> CommandError:
     return CommandError(message)
 
 
+def _tolerance(rtol: float | None) -> float | None:
+    if rtol is not None and not 0.0 < rtol < 1.0:
+        raise CommandError(f"--rtol must be in (0, 1); got {rtol:g}")
+    return rtol
+
+
 def run_command(args) -> int:
     """`barrierjax run [SCENE.toml | cantilever-N]`: returns the exit status."""
     import jax
@@ -250,7 +256,10 @@ def run_command(args) -> int:
     from ..simulate import simulate
 
     n = cantilever_number(args)
+    rtol = _tolerance(args.rtol)
     if n is not None:
+        if rtol is not None:
+            raise CommandError("--rtol applies to an impact scene; a cantilever steps at --dt")
         return run_cantilever(args, n)
     if args.scene is None:
         name = "default scene (barrierjax/default_scene.toml)"
@@ -263,11 +272,17 @@ def run_command(args) -> int:
         if is_system_scene(data):  # a crash test of a barrier system
             from .system import run_system
 
+            if rtol is not None:
+                raise CommandError(
+                    "--rtol applies to an impact scene (report 3.2-3.4); a barrier-system "
+                    "scene steps at its own fixed time step"
+                )
+
             return run_system(args, parse_system_scene(data), name)
         scene = scene_file.parse_scene(data)
     try:
         with progress_after("compiling and solving the impact model (report 3.2/3.3)..."):
-            result = simulate(scene)
+            result = simulate(scene, rtol=rtol)
             jax.block_until_ready(result)
     except (NotImplementedError, ValueError) as error:
         raise _scene_error(error) from None

@@ -109,7 +109,7 @@ def sweep_command(args) -> int:
     try:
         varies = [parse_vary(text, fields) for text in args.vary or ()]
         sweep = Sweep(varies, args.samples, args.seed, args.distribution, args.chunk,
-                      args.skip_failures)  # fmt: skip
+                      args.skip_failures, args.rtol)  # fmt: skip
         start = time.perf_counter()
         with tqdm(total=args.samples, unit="scenario", unit_scale=True, file=None,
                   desc="sweep", leave=False, disable=not lead) as bar:  # fmt: skip
