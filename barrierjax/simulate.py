@@ -16,6 +16,7 @@ from jaxtyping import Array, Float
 
 from . import _checks
 from ._custom_types import Batchable
+from ._solve.phases import SolveError
 from .compilation_cache import stored_program
 from .hinge.axial import axial_impact
 from .hinge.normal import NormalImpact, normal_impact
@@ -124,19 +125,29 @@ def simulate(
     groups = dimensionless(scene)
     inputs = (groups.mass_ratio, groups.force_ratio, groups.normal_speed)
     tolerance = {} if rtol is None else {"rtol": rtol}
-    if not normal:
-        model = oblique_impact(
-            *inputs,
-            groups.tangential_speed,
-            friction=groups.friction,
-            n_history=n_history,
-            max_steps=max_steps,
-            **tolerance,
-        )
-    elif groups.axial_ratio is None:
-        model = normal_impact(*inputs, method=method, n_history=n_history, **tolerance)
-    else:
-        model = axial_impact(*inputs, groups.axial_ratio, n_history=n_history, **tolerance)
+
+    def solved():
+        if not normal:
+            return oblique_impact(
+                *inputs,
+                groups.tangential_speed,
+                friction=groups.friction,
+                n_history=n_history,
+                max_steps=max_steps,
+                **tolerance,
+            )
+        if groups.axial_ratio is None:
+            return normal_impact(*inputs, method=method, n_history=n_history, **tolerance)
+        return axial_impact(*inputs, groups.axial_ratio, n_history=n_history, **tolerance)
+
+    try:
+        model = solved()
+    except SolveError as error:
+        if error.result is None:
+            raise
+        # The batch's other scenarios, solved before the error, in the scene's units.
+        result = _in_units(scene, groups, error.result)
+        raise SolveError(str(error), error.failures, result) from None
     return _in_units(scene, groups, model)
 
 

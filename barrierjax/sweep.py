@@ -298,9 +298,10 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
 
 def _solved(solve, rows, n: int, skip_failures: bool):
     """(`solve(rows)`, {row: error} of the first `n` rows that it could not solve). With
-    `skip_failures`, the rows whose solve failed (`SolveError.failures`) are replaced by
-    one that solved, whose results stand in for them, and the chunk solved again; else the
-    error stands."""
+    `skip_failures`, the rows whose solve failed (`SolveError.failures`) are taken from the
+    error's result where the model solved the chunk before it raised (`SolveError.result`,
+    a `Result`); else they are replaced by one that solved, whose results stand in for
+    them, and the chunk solved again. Without, the error stands."""
     failed: dict[int, str] = {}
     while True:
         try:
@@ -311,6 +312,8 @@ def _solved(solve, rows, n: int, skip_failures: bool):
             if not skip_failures or not new or set(new) & set(failed) or not standing_in:
                 raise
             failed |= new
+            if isinstance(error.result, Result):
+                return result_columns(error.result, len(rows)), failed
             rows = rows.copy()
             rows[list(new)] = rows[standing_in[0]]
             if n - 1 in new:

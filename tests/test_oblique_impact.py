@@ -407,6 +407,12 @@ def test_a_spent_budget_grows_for_the_scenarios_that_spent_it_alone(monkeypatch)
     same = lambda rows, expected: np.testing.assert_array_equal(np.asarray(rows), expected)
     jax.tree.map(lambda b, a: same(b[2], a), batch, alone)
     jax.tree.map(lambda b, w: same(b[:2], w[:2]), batch, without)
+    # With the budget given, it cannot grow: the error names the heavy vehicle and carries
+    # the batch's result, the light ones' rows as solved (what a sweep keeps).
+    with pytest.raises(SolveError) as raised:
+        oblique_impact(*(jnp.asarray(x) for x in zip(*light, heavy)), rtol=1e-6, max_steps=1024)
+    assert list(raised.value.failures) == [2] and "max_steps=1024 was spent" in str(raised.value)
+    jax.tree.map(lambda r, w: same(r[:2], w[:2]), raised.value.result, without)
 
 
 def test_float32_defaults_to_a_tolerance_it_can_meet():

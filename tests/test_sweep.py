@@ -244,6 +244,31 @@ def test_skipped_failures_are_rows_of_nulls_and_the_rest_are_solved(capsys, tmp_
         assert values[:4] + values[5:] == expected[name][:4] + expected[name][5:], name
 
 
+def test_skipped_failures_keep_the_rows_a_model_solved_before_it_raised(tmp_path, monkeypatch):
+    # A model that solved the chunk before it raised (`SolveError.result`) is not called
+    # again: its other rows are kept as solved, the failed one is a row of nulls.
+    from barrierjax import sweep as sweep_module
+    from barrierjax.hinge import SolveError
+
+    varies = _varies("impact.speed=20:60")
+    plain = run_sweep(default_scene(), Sweep(varies, 6, 3, chunk=3), tmp_path / "plain.parquet")
+    calls = []
+
+    def fails_at_row_1_after_solving(batch, **options):
+        calls.append(batch)
+        result = simulate(batch, **options)
+        raise SolveError("model: it failed (scenario 1 of 3)", {1: "it failed"}, result)
+
+    monkeypatch.setattr(sweep_module, "simulate", fails_at_row_1_after_solving)
+    sweep = Sweep(varies, 6, 3, chunk=3, skip_failures=True)
+    rows = run_sweep(default_scene(), sweep, tmp_path / "rows.parquet")
+    assert len(calls) == 2  # one a chunk
+    assert list(rows["failure"]) == ["", "it failed", "", "", "it failed", ""]
+    for name in ("damage", "duration", "max_deflection"):
+        assert [rows[name][k] for k in (0, 2, 3, 5)] == [plain[name][k] for k in (0, 2, 3, 5)]
+        assert np.isnan(rows[name][1]) and np.isnan(rows[name][4])
+
+
 def test_an_unwritable_output_is_refused_in_one_line(capsys, tmp_path):
     blocked = tmp_path / "file"
     blocked.write_text("")

@@ -44,25 +44,29 @@ _FAILURES = {
 class SolveError(RuntimeError):
     """A model's solve that failed: its first failure in one line (the model, the phase,
     what to do) and, in a batch, `failures`, each failed scenario's reason by its flat
-    index; `scenario`, the first of them (None for a single solve)."""
+    index; `scenario`, the first of them (None for a single solve). `result`, where the
+    model had solved the whole batch before it raised, is that result: its entries for
+    the failed scenarios are no answers, the others are (`barrierjax sweep
+    --skip-failures` keeps them instead of solving the batch again); None otherwise."""
 
-    def __init__(self, message: str, failures: dict[int, str] | None = None):
+    def __init__(self, message: str, failures: dict[int, str] | None = None, result=None):
         super().__init__(message)
         self.failures = failures or {}
+        self.result = result
 
     @property
     def scenario(self) -> int | None:
         return min(self.failures) if self.failures else None
 
     @classmethod
-    def of(cls, reasons: dict[int, str], size: int | None) -> SolveError:
+    def of(cls, reasons: dict[int, str], size: int | None, result=None) -> SolveError:
         """The error of the scenarios that failed, `reasons` by flat index, of a batch of
-        `size` (None for a single solve, whose index is 0)."""
+        `size` (None for a single solve, whose index is 0), with the batch's `result`."""
         first = min(reasons)
         if size is None:
-            return cls(reasons[first])
+            return cls(reasons[first], result=result)
         more = f"; {len(reasons)} of them failed" * (len(reasons) > 1)
-        return cls(f"{reasons[first]} (scenario {first} of {size}{more})", reasons)
+        return cls(f"{reasons[first]} (scenario {first} of {size}{more})", reasons, result)
 
 
 class PhaseSolution(eqx.Module):

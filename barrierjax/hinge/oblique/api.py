@@ -72,13 +72,14 @@ _FIRST_BUDGET, _LARGEST_BUDGET = 1024, 65536
 
 
 def _within_budget(solve, args, max_steps, grow, *, moving_load=False):
-    """`solve(args, budget)`'s result, where `solve` returns (result, `Outcome`).
+    """(`solve(args, budget)`'s result, the failed scenarios' reasons by flat index, the
+    flat batch's size or None for one scenario), where `solve` returns (result, `Outcome`).
 
     Traced inside a caller's `jit`, `vmap` or `grad`, failures are run-time errors
-    (`raise_failures`). Otherwise they raise here, in one line that says what to pass; and
-    with `max_steps=None` the scenarios that spent their budget are solved again, alone
-    (`solved_again`), with `grow(budget, their args, their outcome)` (a new compilation
-    each time), up to `_LARGEST_BUDGET`."""
+    (`raise_failures`). Otherwise each failure's reason is one line that says what to pass;
+    and with `max_steps=None` the scenarios that spent their budget are solved again,
+    alone (`solved_again`), with `grow(budget, their args, their outcome)` (a new
+    compilation each time), up to `_LARGEST_BUDGET`."""
     name = "moving_load" if moving_load else "oblique_impact"
 
     def solve_read(args, budget):
@@ -98,32 +99,23 @@ def _within_budget(solve, args, max_steps, grow, *, moving_load=False):
     first = _FIRST_BUDGET if max_steps is None else int(max_steps)
     result, outcome, budget = solved_again(solve_read, args, first, larger, spent)
     if isinstance(outcome.time, Tracer):
-        return raise_failures(result, outcome, moving_load)
-    overtaken = np.flatnonzero(np.asarray(outcome.overtaken).ravel())
-    if overtaken.size:
-        reasons = {int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in overtaken}
-        raise SolveError.of(reasons, _batch_size(outcome))
+        return raise_failures(result, outcome, moving_load), {}, None
+    overtaken, stalled = (np.asarray(flag).ravel() for flag in (outcome.overtaken, outcome.stalled))
+    spent = np.flatnonzero(~np.asarray(outcome.complete).ravel() & ~overtaken & ~stalled)
     phases, times = np.asarray(outcome.phase).ravel(), np.asarray(outcome.time).ravel()
-    stalled = np.flatnonzero(np.asarray(outcome.stalled).ravel())
-    if stalled.size:
-        reasons = {
-            int(k): f"{name}: in {phase_name(int(phases[k]), moving_load)} at "
-            f"T = {times[k]:.4g}, {STALLED_MESSAGE}"
-            for k in stalled
+    where = lambda k: f"{phase_name(int(phases[k]), moving_load)} at T = {times[k]:.4g}"
+    # (Where a scenario is flagged twice, the load's overtaking the hinge is its reason.)
+    reasons = {int(k): f"{name}: in {where(k)}, {STALLED_MESSAGE}" for k in np.flatnonzero(stalled)}
+    reasons |= {int(k): f"{name}: {OVERTAKEN_MESSAGE}" for k in np.flatnonzero(overtaken)}
+    if spent.size:
+        rows = lambda tree: jax.tree.map(lambda leaf: jnp.ravel(leaf)[spent], tree)
+        suggestion = grow(budget, rows(jax.lax.stop_gradient(args)), rows(outcome))
+        reasons |= {
+            int(k): f"{name}: the step budget max_steps={budget} was spent in {where(k)}: "
+            f"pass max_steps={suggestion} or more"
+            for k in spent
         }
-        raise SolveError.of(reasons, _batch_size(outcome))
-    spent = np.flatnonzero(~np.asarray(outcome.complete).ravel())
-    if spent.size == 0:
-        return result
-    rows = lambda tree: jax.tree.map(lambda leaf: jnp.ravel(leaf)[spent], tree)
-    suggestion = grow(budget, rows(jax.lax.stop_gradient(args)), rows(outcome))
-    reasons = {
-        int(k): f"{name}: the step budget max_steps={budget} was spent in "
-        f"{phase_name(int(phases[k]), moving_load)} at T = {times[k]:.4g}: "
-        f"pass max_steps={suggestion} or more"
-        for k in spent
-    }
-    raise SolveError.of(reasons, _batch_size(outcome))
+    return result, reasons, _batch_size(outcome)
 
 
 def _batch_size(outcome: Outcome) -> int | None:
@@ -209,9 +201,14 @@ def oblique_impact(
         padded = lambda *x: differentiable(*x[:-1], rtol, x[-1])
         return solve_padded(padded, inputs, PADDING_QUANTUM)
 
-    result = _within_budget(solve, inputs, max_steps, lambda budget, *_: 4 * budget)
+    grow = lambda budget, *_: 4 * budget
+    result, reasons, size = _within_budget(solve, inputs, max_steps, grow)
     result = _with_rigid_barriers(result, yields, mu, phi, vn, vh, friction, n_history=n_history)
-    return _energy_closed(result, mu, vn, vh, rtol)
+    # (A failed solve's own reason stands before its energy balance's.)
+    reasons = _energy_unclosed(result, mu, vn, vh, rtol) | reasons
+    if reasons:
+        raise SolveError.of(reasons, size, result)
+    return result
 
 
 # A concrete result whose energy balance is off by more than this fraction of the impact's
@@ -223,26 +220,24 @@ def oblique_impact(
 _ENERGY_FLOOR, _ENERGY_PER_RTOL = 1e-2, 1e4
 
 
-def _energy_closed(result: ObliqueImpact, mu, vn, vh, rtol) -> ObliqueImpact:
-    """`result`, once its energy balance is checked to close (`kinetic_energy_balance`),
-    where it is concrete; traced (under `jit`, `vmap`, `grad`), as it is."""
+def _energy_unclosed(result: ObliqueImpact, mu, vn, vh, rtol) -> dict[int, str]:
+    """The scenarios of a concrete `result` whose energy balance does not close
+    (`kinetic_energy_balance`), each with its reason by flat index; none where traced
+    (under `jit`, `vmap`, `grad`)."""
     if any(isinstance(x, Tracer) for x in jax.tree.leaves((result, mu, vn, vh, rtol))):
-        return result
+        return {}
     names = [name for name in RESULT_UNITS if name.endswith("_work")] + ["exit_speed"]
     values = types.SimpleNamespace(**{name: np.asarray(getattr(result, name)) for name in names})
     mu, vn, vh = (np.asarray(x) for x in (mu, vn, vh))
     lost = kinetic_energy_balance(values, mu, vn, vh) / (0.5 * mu * (vn**2 + vh**2))
     bound = max(_ENERGY_FLOOR, _ENERGY_PER_RTOL * float(rtol))
     off = np.flatnonzero(~(np.abs(lost) <= bound).ravel())
-    if off.size:
-        hint = "" if lost.dtype == np.float64 else f"; {_checks.ENABLE_FLOAT64}"
-        reasons = {
-            int(k): f"oblique_impact: the energy balance does not close: {lost.ravel()[k]:.2g} "
-            f"of the impact's kinetic energy unaccounted for (the solve lost its accuracy{hint})"
-            for k in off
-        }
-        raise SolveError.of(reasons, None if lost.ndim == 0 else lost.size)
-    return result
+    hint = "" if lost.dtype == np.float64 else f"; {_checks.ENABLE_FLOAT64}"
+    return {
+        int(k): f"oblique_impact: the energy balance does not close: {lost.ravel()[k]:.2g} "
+        f"of the impact's kinetic energy unaccounted for (the solve lost its accuracy{hint})"
+        for k in off
+    }
 
 
 @stored_program
@@ -392,13 +387,16 @@ def moving_load(
         reached = np.asarray(outcome.time / args[2])
         return _power_of_two_above(1.25 * budget / max(float(np.min(reached)), 1e-3))
 
-    return _within_budget(
+    result, reasons, size = _within_budget(
         lambda args, budget: _moving_load(*args, rtol, max_steps=budget, n_history=n_history),
         args,
         max_steps,
         larger,
         moving_load=True,
     )
+    if reasons:
+        raise SolveError.of(reasons, size, result)
+    return result
 
 
 @functools.partial(jax.jit, static_argnames=("max_steps", "n_history"))
