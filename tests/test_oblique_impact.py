@@ -571,6 +571,18 @@ def test_unyielding_barrier_is_a_rigid_wall(friction):
     assert float(jnp.max(jnp.abs(h.deflected_shape))) == 0.0
 
 
+def test_an_unyielding_barrier_is_a_rigid_wall_whatever_the_mechanism_would_do():
+    # A 1,000-fold heavier vehicle sliding fast: on a yielding barrier its load catches up
+    # with the hinge (an error); on one it cannot yield, the rigid wall. Its lane was solved
+    # at the vehicle's own inputs with phi = 2, and raised that error for it.
+    mu, vn, vh = 1111.66, 0.249144, 0.143843
+    with pytest.raises(SolveError, match="caught up with the hinge"):
+        oblique_impact(mu, 1.41737, vn, vh)
+    r = oblique_impact(jnp.asarray([mu, 5.0]), jnp.asarray([0.9, 2.0]), vn, vh)
+    assert float(r.damage[0]) == pytest.approx(0.5 * mu * vn**2 / 0.9, rel=1e-14)
+    assert float(r.damage[1]) == pytest.approx(float(oblique_impact(5.0, 2.0, vn, vh).damage))
+
+
 def test_batches_across_phi_one_equal_single_runs_and_their_derivatives_match(compilations):
     """A batch with lanes on both sides of phi = 1 equals single runs; the derivatives of
     the rigid wall's crush and exit speed are the closed form's, and across phi = 1 the

@@ -145,7 +145,8 @@ def oblique_impact(
     - `mass_ratio`: mu = M / (m L), positive.
     - `force_ratio`: phi = P0 / P_b, positive; at or below 1 the barrier never yields and
       the vehicle crushes against it as against a rigid wall (`results.rigid_barrier`,
-      in closed form; the step loop runs those lanes at phi = 2 and discards them).
+      in closed form; the step loop runs a light vehicle's impact in those lanes and
+      discards it).
     - `normal_speed`, `tangential_speed`: the vehicle's impact velocity components over
       L / t0; the normal one positive, the tangential one non-negative (zero is the
       normal impact of 3.2).
@@ -166,6 +167,8 @@ def oblique_impact(
     A result whose kinetic-energy balance does not close (off by more than 1 % of the
     impact's energy, or 10^4 rtol) raises a `SolveError` too, where the result is concrete
     (not inside a caller's `jit`, `vmap` or `grad`): float32 solves of heavy vehicles.
+    Such an error names every failed scenario of a batch (`SolveError.failures`) and
+    carries the batch's result (`SolveError.result`): the other scenarios' are answers.
 
     Differentiable with respect to every argument (forward-mode sensitivities, whichever
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap` (padded
@@ -244,11 +247,18 @@ def _energy_unclosed(result: ObliqueImpact, mu, vn, vh, rtol) -> dict[int, str]:
 @jax.jit
 def _lanes(mu, phi, vn, vh, friction):
     """Where the barrier yields, and the step loop's inputs: broadcast, strongly typed (a
-    Python number and an array of its dtype then run one program), and phi = 2 where it
-    does not yield, which keeps those lanes finite (their results are discarded)."""
+    Python number and an array of its dtype then run one program), and where it does not
+    yield, `_STAND_IN`'s impact, which the loop solves in a few dozen steps (their results
+    are discarded): a lane at the vehicle's own inputs could fail, or spend budgets, for
+    a scenario whose answer is the closed form."""
     yields = phi > 1.0
-    args = jnp.broadcast_arrays(mu, jnp.where(yields, phi, 2.0), vn, vh, friction)
+    args = jnp.broadcast_arrays(mu, phi, vn, vh, friction)
+    args = [jnp.where(yields, a, stand_in) for a, stand_in in zip(args, _STAND_IN, strict=True)]
     return yields, tuple(jnp.asarray(a, a.dtype) for a in args)
+
+
+# The impact a lane of an unyielding barrier solves instead (mu, phi, V_N, V_H, friction).
+_STAND_IN = (1.0, 2.0, 0.3, 0.5, 0.0)
 
 
 @stored_program
