@@ -56,7 +56,7 @@ def test_concrete_failures_raise_naming_the_phase_and_the_scenario():
         r"\(scenario 1 of 3; 2 of them failed\)$",
     ) as raised:
         raise_failures("model", result, failures, PHASES)
-    assert raised.value.scenario == 1
+    assert raised.value.scenario == 1 and raised.value.result is result
     assert raised.value.failures == {
         1: "model: the second phase spent its step budget",
         2: "model: the first phase ended at its time bound without reaching its switching "

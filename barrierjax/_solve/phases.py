@@ -190,8 +190,9 @@ def raise_failures(name: str, result, failures, phases: Sequence[str]):
     """`result`, or an error naming the first phase of the first scenario whose solve
     failed. `failures`: the phases' `PhaseSolution.failure` codes along the last axis, the
     scenarios' shape before it; `phases` names them. Concrete failures raise a
-    `SolveError` here; traced ones (inside a caller's `jit`, `vmap` or `grad`) a
-    run-time error where the program runs (`equinox.branched_error_if`)."""
+    `SolveError` here, which carries `result` (the other scenarios' answers); traced ones
+    (inside a caller's `jit`, `vmap` or `grad`) a run-time error where the program runs
+    (`equinox.branched_error_if`)."""
     kinds = len(_FAILURES)
     messages = [f"{name}: {phase} {_FAILURES[code]}" for phase in phases for code in _FAILURES]
     if isinstance(failures, jax.core.Tracer):
@@ -208,7 +209,7 @@ def raise_failures(name: str, result, failures, phases: Sequence[str]):
         return result
     phase = np.argmax(flat != SOLVED, axis=1)  # the first that failed
     reasons = {int(k): messages[phase[k] * kinds + flat[k, phase[k]] - 1] for k in failed}
-    raise SolveError.of(reasons, None if np.ndim(failures) == 1 else len(flat))
+    raise SolveError.of(reasons, None if np.ndim(failures) == 1 else len(flat), result)
 
 
 def sigma_end(rtol):
