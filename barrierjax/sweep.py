@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _xla_flags
+from . import _checks, _xla_flags
 from ._solve.phases import SolveError
 from .scene import Scene
 from .scene_file import FIELDS, Field, SceneFileError, parse_quantity
@@ -232,8 +232,10 @@ def run_sweep(scene, sweep: Sweep, out, *, resume=False, progress=None) -> dict:
                 "--rtol: a barrier-system scene steps at its own fixed time step; the "
                 "tolerance is the impact models' (report 3.2-3.4)"
             )
-        if not 0.0 < sweep.rtol < 1.0:
-            raise SweepError(f"--rtol must be in (0, 1); got {sweep.rtol:g}")
+        try:
+            _checks.tolerance("--rtol", sweep.rtol)
+        except ValueError as error:
+            raise SweepError(str(error)) from None
     values = draw(sweep.varies, sweep.samples, sweep.seed, sweep.distribution)
     parts = parts_folder(out)
     manifest = sweep.manifest(scene)

@@ -29,16 +29,15 @@ REFERENCE = 1e-12
 FIELDS = ("exit_angle_deg", "exit_speed", "duration", "damage", "max_deflection")
 SCENE = HERE.parent / "examples" / "oblique_scene.toml"
 
+_RANGES = ((1000.0, 40000.0), (250e3, 700e3), (5.0, 40.0))  # mass kg, crush force N, deg
+
+# The child's snippet: the same scenes, and a chunk's solve as a sweep runs it.
 _SETUP = """
-    import numpy as np
     import jax.numpy as jnp
-    from barrierjax import Impact, Scene, Vehicle, load_scene, simulate
+    from barrierjax import simulate
     from barrierjax.hinge import SolveError
-    base = load_scene({scene!r})
-    rng = np.random.default_rng({seed})
-    mass, crush, angle = (rng.uniform(lo, hi, {n}) for lo, hi in {ranges!r})
-    scene = Scene(base.barrier, Vehicle(jnp.asarray(mass), jnp.asarray(crush)),
-                  Impact(base.impact.speed, jnp.asarray(angle), base.impact.friction))
+    from tolerance import scenes
+    scene = scenes({n}, {seed})
 
     def solve(rtol):
         # (A scenario that no budget solves, phi - 1 ~ 1e-5, raises after the batch is
@@ -48,24 +47,25 @@ _SETUP = """
         except SolveError:
             return jnp.zeros(())
 """
-_RANGES = ((1000.0, 40000.0), (250e3, 700e3), (5.0, 40.0))
 
 
 def scenes(n: int, seed: int):
-    """The batch scene of `_SETUP`, in this process."""
-    namespace = {}
-    exec(_setup(n, seed), namespace)  # noqa: S102 - the benchmark's own snippet
-    return namespace["scene"], namespace["simulate"]
+    """`n` vehicles drawn uniformly within `_RANGES` on `SCENE`'s barrier, as one batch."""
+    import jax.numpy as jnp
 
+    from barrierjax import Impact, Scene, Vehicle, load_scene
 
-def _setup(n: int, seed: int) -> str:
-    import textwrap
-
-    return textwrap.dedent(_SETUP.format(scene=str(SCENE), seed=seed, n=n, ranges=_RANGES))
+    base = load_scene(SCENE)
+    rng = np.random.default_rng(seed)
+    mass, crush, angle = (jnp.asarray(rng.uniform(lo, hi, n)) for lo, hi in _RANGES)
+    vehicle = Vehicle(mass, crush)
+    return Scene(base.barrier, vehicle, Impact(base.impact.speed, angle, base.impact.friction))
 
 
 def errors(n: int, seed: int) -> list:
-    scene, simulate = scenes(n, seed)
+    from barrierjax import simulate
+
+    scene = scenes(n, seed)
     solve = lambda rtol: simulate(scene, n_history=0, rtol=rtol)
     reference = solve(REFERENCE)
     rows = []
@@ -89,7 +89,7 @@ def costs(n: int, seed: int) -> list:
     rows = []
     for rtol in TOLERANCES:
         call = f"solve({rtol!r})"
-        result = first_call(_setup(n, seed), call, timeout=900.0, steady_reps=2)
+        result = first_call(_SETUP.format(n=n, seed=seed), call, timeout=900.0, steady_reps=2)
         row = dict(rtol=rtol, n=n, **result)
         if result["ok"]:
             row["us"] = result["steady_s"] / n * 1e6

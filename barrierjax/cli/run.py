@@ -10,6 +10,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from .. import _checks
 from ..hinge import SolveError
 from ..hinge.oblique import ObliqueImpact
 from ..hinge.response import RESULT_UNITS, kinetic_energy_balance
@@ -243,9 +244,10 @@ def _scene_error(error: Exception) -> CommandError:
 
 
 def _tolerance(rtol: float | None) -> float | None:
-    if rtol is not None and not 0.0 < rtol < 1.0:
-        raise CommandError(f"--rtol must be in (0, 1); got {rtol:g}")
-    return rtol
+    try:
+        return None if rtol is None else _checks.tolerance("--rtol", rtol)
+    except ValueError as error:
+        raise CommandError(str(error)) from None
 
 
 def run_command(args) -> int:
