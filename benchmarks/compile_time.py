@@ -24,6 +24,8 @@ from pathlib import Path
 
 from harness import argument_parser, first_call, table, write_json
 
+_MASH_3_11 = Path(__file__).resolve().parent.parent / "examples" / "mash_3_11.toml"
+
 _NORMAL = """
     import jax, jax.numpy as jnp
     from barrierjax.hinge import normal_impact
@@ -55,6 +57,32 @@ _BEAM = """
     s0s = float(data["sigma0"]) * jnp.linspace(0.8, 1.2, {batch})
     one, many = tip, jax.vmap(tip)
 """
+# The barrier system on MASH 3-11 (0.6 s of impact, the scene's step): the peak dynamic
+# deflection against the impact speed. Its batch is 4 variants: a run costs about a
+# second after compilation.
+_SYSTEM = """
+    import jax, jax.numpy as jnp
+    from barrierjax.system import system_impact
+    from barrierjax.system.scene import load_system_scene
+    s = load_system_scene({scene!r})
+    def deflection(speed):
+        return system_impact(s.vehicle, s.barrier, speed=speed, angle_deg=s.angle_deg,
+                             impact_point=s.impact_point, duration=0.6,
+                             friction=s.friction).dynamic_deflection
+    speeds = s.speed * jnp.linspace(0.9, 1.1, {batch})
+    one, many = deflection, jax.vmap(deflection)
+"""
+# Occupant risk of a record of 1 s at 10 kHz (a half-sine pulse of 100 ms on ax, and 0.3 of
+# it on ay): the OIV against the pulse's amplitude in g; a batch is records side by side.
+_OCCUPANT = """
+    import jax, jax.numpy as jnp
+    from barrierjax.assess import occupant_risk
+    t = jnp.arange(10_001) * 1e-4
+    pulse = 9.80665 * jnp.where(t < 0.1, jnp.sin(jnp.pi * t / 0.1), 0.0)
+    risk = lambda g: occupant_risk(t, -g[..., None] * pulse, 0.3 * g[..., None] * pulse)
+    one = many = lambda g: risk(jnp.asarray(g)).oiv_x
+    gs = jnp.linspace(5.0, 25.0, {batch})
+"""
 _MATERIAL = """
     import jax, jax.numpy as jnp
     from barrierjax import materials
@@ -77,6 +105,10 @@ def cases(quick: bool) -> dict:
         "oblique (3.3)": (_OBLIQUE.format(batch=batch), "5.0", "mus"),
         "beam, Example 1": (_BEAM.format(batch=4 if quick else 16, steps=20 if quick else 200), "s0s[0]", "s0s"),
         "uniaxial, Cowper-Symonds": (_MATERIAL.format(batch=batch), "250e6", "s0s"),
+        "barrier system, MASH 3-11": (
+            _SYSTEM.format(batch=2 if quick else 4, scene=str(_MASH_3_11)), "s.speed", "speeds"
+        ),
+        "occupant risk": (_OCCUPANT.format(batch=batch), "15.0", "gs"),
     }
     out = {}
     for name, (setup, scalar, array) in models.items():
