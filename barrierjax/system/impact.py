@@ -84,7 +84,10 @@ def system_impact(
 ) -> SystemResult:
     """The vehicle at `speed` (m/s) and `angle_deg` to the barrier, its left front corner on
     the face at `impact_point` (m along it), for `duration` (s) in steps of `dt` (default:
-    the guardrail's stable step, `barrier.stable_step`, or 1e-4 s for a wall)."""
+    the guardrail's stable step, `barrier.stable_step`, or 1e-4 s for a wall). The history
+    keeps a sample every `save_every` steps (the vehicle's acceleration and the contact's
+    forces on the rail averaged over them); a reverse-mode gradient keeps the state there
+    and computes the steps between again, so that its memory falls as `save_every` grows."""
     speed = positive("speed", speed)
     angle = jnp.radians(in_range("angle_deg", angle_deg, 0.0, 90.0))
     if _concrete_guardrail(vehicle, barrier):
