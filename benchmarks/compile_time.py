@@ -58,7 +58,7 @@ _BEAM = """
     one, many = tip, jax.vmap(tip)
 """
 # The barrier system on MASH 3-11 (0.6 s of impact, the scene's step): the peak dynamic
-# deflection against the impact speed. Its batch is 4 variants: a run costs about a
+# deflection against the impact speed. Its batch is 4 variants: a run costs about half a
 # second after compilation.
 _SYSTEM = """
     import jax, jax.numpy as jnp
