@@ -81,7 +81,7 @@ for _ in range({steady_reps}):
     jax.block_until_ready({call})
     _steady.append(time.perf_counter() - _t)
 print("FIRST_CALL " + json.dumps(dict(import_s=_t1 - _t0, first_call_s=_t2 - _t1, peak_rss_mb=_peak,
-                                      steady_s=min(_steady) if _steady else None)))
+                                      steady_s=min(_steady) if _steady else None, steady_runs_s=_steady)))
 """
 
 
@@ -101,7 +101,8 @@ def first_call(
 ) -> dict:
     """Run `setup` (imports and inputs: timed as `import_s`) then the expression `call`
     (waited for: `first_call_s`) in a fresh `sys.executable` with `JAX_ENABLE_X64` set to
-    `x64`, and then `steady_reps` more times (the best: `steady_s`). The child is killed
+    `x64`, and then `steady_reps` more times (the best: `steady_s`; each: `steady_runs_s`).
+    The child is killed
     after `timeout` s or above `rss_limit_gb` resident. `package`: a folder holding another
     checkout's `barrierjax`, imported in its place (to measure a commit against another).
     `env`: environment variables set in the child."""

@@ -8,8 +8,9 @@ Each case runs in a fresh process twice: with `BARRIERJAX_PARTS=1` (the whole ba
 one program, as before) and as shipped (as many parts as cores, at most 8, at least 1,024
 scenarios each); the two alternate, `--rounds` times, so that the machine's drift falls on
 both. Per case: the time per scenario (the best of 5 calls after the first, in each round;
-the median over rounds), the speed-up, and each configuration's first call (tracing,
-compilation and one run) and peak memory. The scenarios are `oblique_impact.py`'s box
+the median over rounds), the speed-up, the median and slowest of every call timed (the best
+hides calls whose parts ran one after the other), and each configuration's first call
+(tracing, compilation and one run) and peak memory. The scenarios are `oblique_impact.py`'s box
 (log-uniform mass ratio 0.1-10, force ratio 1.1-8, angle 5-85 degrees, speed 0.1-1; friction
 0.1-0.4 on every third); the normal models take its mass ratio, force ratio and normal
 speed; the axial model an axial ratio of 0.5. rtol 1e-6 for the three integrations.
@@ -62,6 +63,9 @@ def measure(model: str, n: int, seed: int, rounds: int) -> dict:
         row[f"{label}_first_s"] = statistics.median(r["first_call_s"] for r in rs)
         row[f"{label}_peak_mb"] = max(r["peak_rss_mb"] for r in rs)
         row[f"{label}_runs_us"] = [r["steady_s"] / n * 1e6 for r in rs]
+        calls = [t / n * 1e6 for r in rs for t in r["steady_runs_s"]]
+        row[f"{label}_median_call_us"] = statistics.median(calls)
+        row[f"{label}_slowest_call_us"] = max(calls)
     row["speedup"] = row["one_us"] / row["parts_us"]
     return dict(row, ok=True, first_calls=runs)
 
@@ -89,15 +93,23 @@ def main():
         rows,
         [("model", "model", "s"), ("scenarios", "n", "d"), ("whole us", "one_us", ".2f"),
          ("parts us", "parts_us", ".2f"), ("speed-up", "speedup", ".2f"),
+         ("median call us whole / parts", "one_median_call_us", ".2f"),
+         ("", "parts_median_call_us", ".2f"),
+         ("slowest call us whole / parts", "one_slowest_call_us", ".2f"),
+         ("", "parts_slowest_call_us", ".2f"),
          ("first s whole / parts", "one_first_s", ".1f"), ("", "parts_first_s", ".1f"),
          ("peak MB whole / parts", "one_peak_mb", ".0f"), ("", "parts_peak_mb", ".0f")],
     )  # fmt: skip
     ode = {r["n"]: r for r in rows if r["ok"] and r["model"] == "normal, ODE"}
     for r in rows:
         if r["ok"] and r["model"] == "oblique (3.3)" and r["n"] in ode:
-            r["over_normal_ode"] = {k: r[f"{k}_us"] / ode[r["n"]][f"{k}_us"] for k in ("one", "parts")}
+            ratio = lambda key: r[key] / ode[r["n"]][key]
+            r["over_normal_ode"] = {k: ratio(f"{k}_us") for k in ("one", "parts")}
+            r["over_normal_ode_median_call"] = {k: ratio(f"{k}_median_call_us") for k in ("one", "parts")}
             print(f"oblique / normal ODE per scenario at {r['n']}: whole {r['over_normal_ode']['one']:.2f}, "
-                  f"in parts {r['over_normal_ode']['parts']:.2f}")
+                  f"in parts {r['over_normal_ode']['parts']:.2f} (medians of every call: whole "
+                  f"{r['over_normal_ode_median_call']['one']:.2f}, in parts "
+                  f"{r['over_normal_ode_median_call']['parts']:.2f})")
     for r in rows:
         r.pop("first_calls", None)
     write_json(args, "parts", {"first_call": first, "parts": rows}, rounds=rounds)

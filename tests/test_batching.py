@@ -63,6 +63,34 @@ def test_large_concrete_batches_are_solved_in_equal_parts_from_threads(monkeypat
     np.testing.assert_array_equal(out["rows"], jnp.stack([x, 2 * y], axis=-1))
 
 
+def test_each_part_is_waited_for_in_the_thread_that_dispatched_it():
+    """JAX's CPU client runs the programs one thread dispatches in turn: a thread that
+    dispatched a part and went on to the next part made the two run one after the other.
+    So each part's thread waits for its result before it takes another part."""
+    events = []
+
+    class Dispatched:
+        """A result whose wait (`jax.block_until_ready`) is recorded."""
+
+        def __init__(self, part):
+            self.part = part
+
+        def block_until_ready(self):
+            events.append((threading.get_ident(), "waited", self.part))
+            return self
+
+    def solve(part):
+        events.append((threading.get_ident(), "dispatched", int(part)))
+        return Dispatched(int(part))
+
+    results = batching._side_by_side(solve, [(jnp.asarray(k),) for k in range(6)])
+    assert [r.part for r in results] == list(range(6))
+    for thread in {ident for ident, _, _ in events}:
+        own = [(what, part) for ident, what, part in events if ident == thread]
+        assert own[0::2] == [("dispatched", part) for _, part in own[0::2]]
+        assert own[1::2] == [("waited", part) for _, part in own[0::2]], own
+
+
 def test_parts_follow_the_cores_and_leave_traced_inputs_whole(monkeypatch):
     monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
     x = jnp.zeros(10_000)

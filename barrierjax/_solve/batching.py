@@ -165,8 +165,14 @@ def rows_in_parts(solve, rows, *, part_size: int | None = None):
 
 
 def _side_by_side(solve, arguments: list) -> list:
-    """`solve(*a)` for each `a` of `arguments`, each called from a thread of its own, with
-    the caller's `jax_enable_x64`."""
+    """`solve(*a)` for each `a` of `arguments`, each called from a thread of its own and
+    waited for there, with the caller's `jax_enable_x64`.
+
+    JAX's CPU client runs the programs that one thread dispatches one after another. Not
+    waited for, a part's call returned as soon as it was dispatched, the pool handed the
+    next part to the same thread, and the two parts ran in turn: a third of the calls of
+    the normal ODE's and the oblique model's 10^4 scenarios on 2 cores took twice as long
+    (benchmarks/README.md, "Batches in parts")."""
     # The arguments are made before any part runs: made in a part's thread, they could wait
     # behind another part's run.
     arguments = jax.block_until_ready(arguments)
@@ -174,7 +180,7 @@ def _side_by_side(solve, arguments: list) -> list:
 
     def run(arguments):
         with jax.enable_x64(x64):
-            return solve(*arguments)
+            return jax.block_until_ready(solve(*arguments))
 
     return [future.result() for future in [_pool().submit(run, a) for a in arguments]]
 
