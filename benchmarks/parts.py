@@ -2,10 +2,10 @@
 
     python benchmarks/parts.py [--quick] [--out DIR] [--seed N] [--rounds N] [--only WORD ...]
 
-A model called on concrete arrays of 2,048 scenarios or more splits them, on a CPU, into
+A model called on concrete arrays of 1,024 scenarios or more splits them, on a CPU, into
 equal parts called from threads of their own, so that each core runs one part's program.
 Each case runs in a fresh process twice: with `BARRIERJAX_PARTS=1` (the whole batch as
-one program, as before) and as shipped (as many parts as cores, at most 8, at least 1,024
+one program, as before) and as shipped (as many parts as cores, at most 8, at least 512
 scenarios each); the two alternate, `--rounds` times, so that the machine's drift falls on
 both. Per case: the time per scenario (the best of 5 calls after the first, in each round;
 the median over rounds), the speed-up, the median and slowest of every call timed (the best

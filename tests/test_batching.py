@@ -95,10 +95,11 @@ def test_parts_follow_the_cores_and_leave_traced_inputs_whole(monkeypatch):
     monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
     x = jnp.zeros(10_000)
     assert batching._parts(10_000, (x,)) == 2
-    assert batching._parts(2047, (x[:2047],)) == 1  # under two parts' worth
+    assert batching._parts(1024, (x[:1024],)) == 2
+    assert batching._parts(1023, (x[:1023],)) == 1  # under two parts' worth
     monkeypatch.setattr(batching.os, "sched_getaffinity", lambda pid: set(range(64)), raising=False)
     assert batching._parts(10_000, (x,)) == 8  # the most, unless BARRIERJAX_PARTS says
-    assert batching._parts(3000, (x[:3000],)) == 2
+    assert batching._parts(1600, (x[:1600],)) == 3
     monkeypatch.setenv("BARRIERJAX_PARTS", "3")
     assert batching._parts(10_000, (x,)) == 3
     monkeypatch.setenv("BARRIERJAX_PARTS", "1")
@@ -181,7 +182,7 @@ def test_rows_in_parts_splits_at_the_callers_part_size(monkeypatch):
         return rows[:, 0] * 2
 
     rows = jnp.arange(128.0).reshape(64, 2)
-    whole = batching.rows_in_parts(solve, rows)  # under two parts of 1,024: whole
+    whole = batching.rows_in_parts(solve, rows)  # under two parts of 512: whole
     parts = batching.rows_in_parts(solve, rows, part_size=16)
     assert shapes == [(64, 2), (32, 2)]
     np.testing.assert_array_equal(parts, whole)

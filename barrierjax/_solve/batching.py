@@ -194,11 +194,15 @@ def _padded(inputs: tuple, size: int) -> tuple:
     return (*padded, jnp.asarray(n, jnp.int32))
 
 
-# Scenarios a part holds at least, and the most parts (`BARRIERJAX_PARTS` sets it). 1,024
-# scenarios in two parts of 512 (2 cores): the normal ODE 5.0-5.8 -> 3.3-4.2 us a scenario,
-# the axial model 82-88 -> 59-61, the oblique queue 74 -> 67-92 (its 384 lanes then wait
-# longer for a part's slowest); 2,048 in two parts of 1,024: 5.3 -> 2.9, 129 -> 47, 50 -> 46.
-_PART_SIZE, _PARTS = 1024, 8
+# Scenarios a part holds at least, and the most parts (`BARRIERJAX_PARTS` sets it). Whole
+# against two parts on 2 cores, oblique_impact.py's box at rtol 1e-6, the median of 6 calls
+# after the first (2026-11-30, once each part was waited for in its own thread): 1,024
+# scenarios, the normal ODE 7.2-7.6 -> 4.8-4.9 us a scenario, the axial model 268 -> 140,
+# the oblique model 41-42 -> 31-33; 1,536: 6.0-6.4 -> 4.0-5.7, 265 -> 132, 38-39 -> 31-32;
+# with parts of 256 to 384 the normal ODE no longer gained. (Before, with a third of the
+# calls running their parts in turn, 1,024 in parts of 512 had not paid for the oblique
+# model, and the least part was 1,024.)
+_PART_SIZE, _PARTS = 512, 8
 
 
 def _parts(n: int, inputs: tuple, part_size: int = _PART_SIZE) -> int:

@@ -110,7 +110,7 @@ def axial_impact(
     `string_work` the string's plastic work, and the history has `axial_force` and the
     string's profile. Scalars, or arrays of one shape (in sorted vmapped chunks of 64,
     padded with copies to the next power of two or whole chunk, so that batches of nearby
-    sizes share one compiled program; on a CPU, 2,048 scenarios or more in parts run side
+    sizes share one compiled program; on a CPU, 1,024 scenarios or more in parts run side
     by side, one a core); `rtol` is traced, so a new tolerance does not recompile. A
     failed solve raises as in `normal_impact`, naming the stage. Where a solve spends its
     step budget (a heavy vehicle with a force ratio close to 1, whose crushing phase needs

@@ -112,7 +112,7 @@ def normal_impact(
     Scalars, or arrays of one shape (solved in cache-sized vmapped chunks: the fastest
     way to run a large sweep; padded with copies to the next power of two, or above 256
     to the next multiple of 256, so that sweeps of nearby sizes share one compiled
-    program; on a CPU, 2,048 scenarios or more in parts run side by side, one a core);
+    program; on a CPU, 1,024 scenarios or more in parts run side by side, one a core);
     `jax.vmap` and `jax.grad` work with respect to any argument. A failed ODE solve (a
     spent step budget, say) raises a `RuntimeError` naming the phase and the scenario;
     inside a caller's `jit`, `vmap` or `grad`, an error where the program runs.

@@ -174,7 +174,7 @@ def oblique_impact(
     way JAX differentiates); scalars, or arrays of one shape solved under `vmap` (padded
     to the next power of two, above 256 to a multiple of 256, so that batches of nearby
     sizes share one compiled program; the forward solve skips the copies, the
-    derivatives' solves them; on a CPU, 2,048 scenarios or more in parts run side by side,
+    derivatives' solves them; on a CPU, 1,024 scenarios or more in parts run side by side,
     one a core).
     """
     _check_options(rtol, max_steps)
