@@ -148,7 +148,7 @@ def test_bad_string_options_name_the_field(kwargs, field):
 
 
 def test_the_string_start_pass_takes_diffraxs_constant_steps():
-    """The second pass over the beam stage (`stages._trace`: Tsit5's own step in a scan)
+    """The second pass over the beam stage (`stages._trace`: Tsit5's own step in a loop)
     against `diffeqsolve` with the same constant steps, saved at the same times; and no
     step at all where the phase has no length (the string not reached)."""
     import diffrax
@@ -192,3 +192,42 @@ def test_the_string_start_pass_takes_diffraxs_constant_steps():
             stages._accelerating_field, hinge, y0, zero, t_end, p, samples=samples,
             solver=diffrax.Kvaerno5(),
         )  # fmt: skip
+
+
+def test_the_string_start_pass_steps_only_where_a_member_reaches_the_string():
+    """Under `vmap` (a model's vmapped chunk) the second pass steps while any member has a
+    phase to trace, and not at all where none has: its `lax.scan` took every step in every
+    chunk, and the axial batch of 10^4 ran 3.2 times as long."""
+    import diffrax
+
+    from barrierjax.hinge.axial import stages
+
+    steps = []
+
+    class Counted(diffrax.Tsit5):
+        def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+            jax.debug.callback(lambda: steps.append(1))
+            return super().step(terms, t0, t1, y0, args, solver_state, made_jump)
+
+    phi = 2.0
+    p = stages._Params(
+        jnp.asarray(0.5), jnp.asarray(phi), jnp.asarray(5.0), 3.0 / (np.sqrt(phi**2 + 3) + phi)
+    )
+    zero = jnp.zeros(())
+    y0 = stages._Accelerating(zero + 1.0, zero, zero, zero, zero, zero, zero, zero)
+
+    @jax.jit
+    @jax.vmap
+    def traced(t_end):
+        return stages._trace(
+            stages._accelerating_field, ("hinge_offset", p.s_star), y0, zero, t_end, p,
+            samples=17, solver=Counted(),
+        ).values  # fmt: skip
+
+    none = jax.block_until_ready(traced(jnp.zeros(2)))
+    assert steps == []
+    np.testing.assert_array_equal(none, np.repeat(none[:, :, :1], 17, axis=2))
+    one = jax.block_until_ready(traced(jnp.asarray([0.0, 0.05])))
+    assert len(steps) == 16
+    np.testing.assert_array_equal(one[0], none[0])
+    assert float(jnp.max(one[1, 1])) > 1e-3

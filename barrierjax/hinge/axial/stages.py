@@ -70,7 +70,9 @@ conditions (3.4.46) built here.
 """
 
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
+import jax.flatten_util
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
@@ -252,10 +254,14 @@ def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
     steps of `solver` (none where t_end is 0). `hinge = (name, offset)`: S is offset + the
     state's field `name`.
 
-    The steps are the solver's own (`solver.step`) in a `lax.scan` that keeps each step's
-    end. The samples are the step ends, so `diffeqsolve`'s step-size control, event
+    The steps are the solver's own (`solver.step`) in a loop that writes each step's end
+    in place. The samples are the step ends, so `diffeqsolve`'s step-size control, event
     handling and interpolation onto saved times have nothing to do here; without them
-    the model's first call compiles in a quarter less time."""
+    the model's first call compiles in a quarter less time. The loop runs no step where
+    t_end is 0: under `vmap` it steps while any member does, so that a chunk in which no
+    scenario reaches the string takes none (a `lax.scan` took all of them everywhere:
+    the batch ran 3.2 times as long, benchmarks/README.md, "The axial batch's string
+    start")."""
     import diffrax  # (on first use: see `_solve.phases`)
 
     name, offset = hinge
@@ -276,23 +282,27 @@ def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
     h = t_end / (samples - 1)
     ts = t_end * jnp.linspace(0.0, 1.0, samples)
 
-    def advance(carry, ends):
-        state, solver_state = carry
-        state, _, _, solver_state, _ = solver.step(
-            term, ends[0], ends[1], state, args, solver_state, made_jump=False
-        )
-        return (state, solver_state), state
-
     start = (y0, q0)
+    steps = jnp.where(t_end > 0.0, samples - 1, 0)
 
-    def stepped():
-        solver_state = solver.init(term, ts[0], ts[1], start, args)
-        return jax.lax.scan(advance, (start, solver_state), (ts[:-1], ts[1:]))[1]
+    flat, unflatten = jax.flatten_util.ravel_pytree(start)
 
-    held = lambda: jax.tree.map(lambda x: jnp.broadcast_to(x, (samples - 1, *x.shape)), start)
-    # (Where the string is not reached, no step is taken: under `vmap` both branches run.)
-    steps = jax.lax.cond(t_end > 0.0, stepped, held)
-    y, q = jax.tree.map(lambda a, b: jnp.concatenate([a[None], b]), start, steps)
+    def advance(carry):
+        k, state, solver_state, ends = carry
+        state, _, _, solver_state, _ = solver.step(
+            term, ts[k], ts[k + 1], state, args, solver_state, made_jump=False
+        )
+        return k + 1, state, solver_state, ends.at[k + 1].set(ravel(state))
+
+    ravel = lambda state: jax.flatten_util.ravel_pytree(state)[0]
+    # One row a sample, the start in every row until a step's end is written over it (in
+    # place, `buffers`: lax's while loop under `vmap` would select it whole at each step).
+    ends = jnp.broadcast_to(flat, (samples, flat.size))
+    first = (0 * steps, start, solver.init(term, ts[0], ts[1], start, args), ends)
+    *_, ends = eqxi.while_loop(
+        lambda carry: carry[0] < steps, advance, first, kind="lax", buffers=lambda c: c[3]
+    )
+    y, q = jax.vmap(unflatten)(ends)
     rates, q_rate = jax.vmap(traced, in_axes=(0, 0, None))(ts, (y, q), args)
     return _Trace(
         h=h,
