@@ -1,6 +1,7 @@
 """Benchmark of large batches solved in parts, one a core (`barrierjax._solve.batching`).
 
     python benchmarks/parts.py [--quick] [--out DIR] [--seed N] [--rounds N] [--only WORD ...]
+                               [--compare PATH] [--slower X]
 
 A model called on concrete arrays of 1,024 scenarios or more splits them, on a CPU, into
 equal parts called from threads of their own, so that each core runs one part's program.
@@ -15,13 +16,17 @@ hides calls whose parts ran one after the other), and each configuration's first
 0.1-0.4 on every third); the normal models take its mass ratio, force ratio and normal
 speed; the axial model an axial ratio of 0.5. rtol 1e-6 for the three integrations.
 `--only`: the cases whose label ("model, scenarios", e.g. "oblique (3.3), 10000") holds one
-of the words. Where the oblique model and the normal ODE ran on the same scenarios, their
+of the words. `--compare PATH`: an earlier run's parts.json, each case's time beside its own
+there, flagged where more than `--slower` (1.5) times it (the axial batch ran 3.2 times
+slower for three days before a full run showed it). Where the oblique model and the normal ODE ran on the same scenarios, their
 ratio per scenario (issue 28's sweep criterion) closes the summary. Writes `parts.json` to
 `--out`.
 """
 
+import json
 import os
 import statistics
+from pathlib import Path
 
 from harness import argument_parser, first_call, first_call_table, table, write_json
 
@@ -70,10 +75,30 @@ def measure(model: str, n: int, seed: int, rounds: int) -> dict:
     return dict(row, ok=True, first_calls=runs)
 
 
+def compared(rows: list, reference: list, slower: float) -> list:
+    """Each case's time per scenario beside the same case's in `reference` (the rows of an
+    earlier run's parts.json), whole and in parts; `slower` where either is more than
+    `slower` times its reference."""
+    earlier = {(r["model"], r["n"]): r for r in reference if r.get("ok")}
+    out = []
+    for r in rows:
+        before = earlier.get((r["model"], r["n"])) if r["ok"] else None
+        if before is None:
+            continue
+        ratios = {k: r[f"{k}_us"] / before[f"{k}_us"] for k in ("one", "parts")}
+        out.append(dict(model=r["model"], n=r["n"], one_before_us=before["one_us"], one_us=r["one_us"],
+                        parts_before_us=before["parts_us"], parts_us=r["parts_us"],
+                        one_ratio=ratios["one"], parts_ratio=ratios["parts"],
+                        slower=max(ratios.values()) > slower))  # fmt: skip
+    return out
+
+
 def main():
     parser = argument_parser(__doc__)
     parser.add_argument("--rounds", type=int, default=2, help="alternating rounds per case")
     parser.add_argument("--only", nargs="*", default=(), help="cases whose label holds one of these words")
+    parser.add_argument("--compare", type=Path, help="an earlier run's parts.json: each case beside it")
+    parser.add_argument("--slower", type=float, default=1.5, help="flag a case this many times slower")
     args = parser.parse_args()
     rounds = 1 if args.quick else args.rounds
     selected = [
@@ -112,7 +137,17 @@ def main():
                   f"{r['over_normal_ode_median_call']['parts']:.2f})")
     for r in rows:
         r.pop("first_calls", None)
-    write_json(args, "parts", {"first_call": first, "parts": rows}, rounds=rounds)
+    results = {"first_call": first, "parts": rows}
+    if args.compare:
+        results["compared"] = compared(rows, json.loads(args.compare.read_text())["parts"], args.slower)
+        table(
+            f"Against {args.compare}: us a scenario then and now (slower: more than {args.slower} times)",
+            results["compared"],
+            [("model", "model", "s"), ("scenarios", "n", "d"), ("whole then", "one_before_us", ".2f"),
+             ("now", "one_us", ".2f"), ("in parts then", "parts_before_us", ".2f"), ("now", "parts_us", ".2f"),
+             ("ratio whole / parts", "one_ratio", ".2f"), ("", "parts_ratio", ".2f"), ("slower", "slower", "s")],
+        )  # fmt: skip
+    write_json(args, "parts", results, rounds=rounds)
 
 
 if __name__ == "__main__":

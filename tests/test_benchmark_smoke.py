@@ -18,11 +18,12 @@ pytest.importorskip("scipy")
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
-def run_quick(name, out, timeout, sections):
-    """Run benchmarks/<name>.py --quick into `out`; it must succeed and print its tables.
-    Returns the JSON it wrote, checked for the harness's common layout and `sections`."""
+def run_quick(name, out, timeout, sections, extra=()):
+    """Run benchmarks/<name>.py --quick into `out` (and `extra` options); it must succeed and
+    print its tables. Returns the JSON it wrote, checked for the harness's common layout and
+    `sections`."""
     proc = subprocess.run(
-        [sys.executable, str(BENCHMARKS / f"{name}.py"), "--quick", "--out", str(out)],
+        [sys.executable, str(BENCHMARKS / f"{name}.py"), "--quick", "--out", str(out), *extra],
         check=False,
         capture_output=True,
         text=True,
@@ -128,8 +129,17 @@ def test_beam_fe_benchmark_quick(tmp_path):
 
 
 def test_parts_benchmark_quick(tmp_path):
+    # Beside an earlier run's figures: one as fast as no run can be (so this one is flagged
+    # slower), one case the earlier run did not have (left out).
+    earlier = tmp_path / "earlier.json"
+    case = {"model": "normal, ODE", "n": 2048, "ok": True, "one_us": 1e-9, "parts_us": 1e-9}
+    other = dict(case, n=10_000)
+    earlier.write_text(json.dumps({"parts": [case, other]}))
     out = tmp_path / "results"
-    data = run_quick("parts", out, 120, ("parts",))
+    data = run_quick("parts", out, 120, ("parts", "compared"), ("--compare", str(earlier)))
     (row,) = data["parts"]
     assert row["ok"] and row["model"] == "normal, ODE" and row["n"] == 2048
     assert row["one_us"] > 0 and row["parts_us"] > 0
+    (beside,) = data["compared"]
+    assert beside["n"] == 2048 and beside["slower"] is True
+    assert beside["parts_ratio"] == row["parts_us"] / 1e-9
