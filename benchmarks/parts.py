@@ -18,9 +18,9 @@ speed; the axial model an axial ratio of 0.5. rtol 1e-6 for the three integratio
 `--only`: the cases whose label ("model, scenarios", e.g. "oblique (3.3), 10000") holds one
 of the words. `--compare PATH`: an earlier run's parts.json, each case's time beside its own
 there, flagged where more than `--slower` (1.5) times it (the axial batch ran 3.2 times
-slower for three days before a full run showed it). Where the oblique model and the normal ODE ran on the same scenarios, their
-ratio per scenario (issue 28's sweep criterion) closes the summary. Writes `parts.json` to
-`--out`.
+slower for three days before a full run showed it). Where the oblique model and the normal
+ODE ran on the same scenarios, their ratio per scenario (issue 28's sweep criterion) closes
+the summary. Writes `parts.json` to `--out`.
 """
 
 import json
@@ -86,7 +86,8 @@ def compared(rows: list, reference: list, slower: float) -> list:
         if before is None:
             continue
         ratios = {k: r[f"{k}_us"] / before[f"{k}_us"] for k in ("one", "parts")}
-        out.append(dict(model=r["model"], n=r["n"], one_before_us=before["one_us"], one_us=r["one_us"],
+        out.append(dict(model=r["model"], n=r["n"],
+                        one_before_us=before["one_us"], one_us=r["one_us"],
                         parts_before_us=before["parts_us"], parts_us=r["parts_us"],
                         one_ratio=ratios["one"], parts_ratio=ratios["parts"],
                         slower=max(ratios.values()) > slower))  # fmt: skip
@@ -97,8 +98,8 @@ def main():
     parser = argument_parser(__doc__)
     parser.add_argument("--rounds", type=int, default=2, help="alternating rounds per case")
     parser.add_argument("--only", nargs="*", default=(), help="cases whose label holds one of these words")
-    parser.add_argument("--compare", type=Path, help="an earlier run's parts.json: each case beside it")
-    parser.add_argument("--slower", type=float, default=1.5, help="flag a case this many times slower")
+    parser.add_argument("--compare", type=Path, help="an earlier run's parts.json")
+    parser.add_argument("--slower", type=float, default=1.5, help="flag this many times slower")
     args = parser.parse_args()
     rounds = 1 if args.quick else args.rounds
     selected = [
@@ -130,7 +131,9 @@ def main():
         if r["ok"] and r["model"] == "oblique (3.3)" and r["n"] in ode:
             ratio = lambda key: r[key] / ode[r["n"]][key]
             r["over_normal_ode"] = {k: ratio(f"{k}_us") for k in ("one", "parts")}
-            r["over_normal_ode_median_call"] = {k: ratio(f"{k}_median_call_us") for k in ("one", "parts")}
+            r["over_normal_ode_median_call"] = {
+                k: ratio(f"{k}_median_call_us") for k in ("one", "parts")
+            }
             print(f"oblique / normal ODE per scenario at {r['n']}: whole {r['over_normal_ode']['one']:.2f}, "
                   f"in parts {r['over_normal_ode']['parts']:.2f} (medians of every call: whole "
                   f"{r['over_normal_ode_median_call']['one']:.2f}, in parts "
@@ -139,13 +142,17 @@ def main():
         r.pop("first_calls", None)
     results = {"first_call": first, "parts": rows}
     if args.compare:
-        results["compared"] = compared(rows, json.loads(args.compare.read_text())["parts"], args.slower)
+        earlier = json.loads(args.compare.read_text())["parts"]
+        results["compared"] = compared(rows, earlier, args.slower)
         table(
-            f"Against {args.compare}: us a scenario then and now (slower: more than {args.slower} times)",
+            f"Against {args.compare}: us a scenario then and now "
+            f"(slower: more than {args.slower} times)",
             results["compared"],
-            [("model", "model", "s"), ("scenarios", "n", "d"), ("whole then", "one_before_us", ".2f"),
-             ("now", "one_us", ".2f"), ("in parts then", "parts_before_us", ".2f"), ("now", "parts_us", ".2f"),
-             ("ratio whole / parts", "one_ratio", ".2f"), ("", "parts_ratio", ".2f"), ("slower", "slower", "s")],
+            [("model", "model", "s"), ("scenarios", "n", "d"),
+             ("whole then", "one_before_us", ".2f"), ("now", "one_us", ".2f"),
+             ("in parts then", "parts_before_us", ".2f"), ("now", "parts_us", ".2f"),
+             ("ratio whole / parts", "one_ratio", ".2f"), ("", "parts_ratio", ".2f"),
+             ("slower", "slower", "s")],
         )  # fmt: skip
     write_json(args, "parts", results, rounds=rounds)
 
