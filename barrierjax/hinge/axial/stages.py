@@ -286,6 +286,7 @@ def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
     steps = jnp.where(t_end > 0.0, samples - 1, 0)
 
     flat, unflatten = jax.flatten_util.ravel_pytree(start)
+    ravel = lambda state: jax.flatten_util.ravel_pytree(state)[0]
 
     def advance(carry):
         k, state, solver_state, ends = carry
@@ -294,7 +295,6 @@ def _trace(field, hinge, y0, q0, t_end, args, *, samples, solver) -> _Trace:
         )
         return k + 1, state, solver_state, ends.at[k + 1].set(ravel(state))
 
-    ravel = lambda state: jax.flatten_util.ravel_pytree(state)[0]
     # One row a sample, the start in every row until a step's end is written over it (in
     # place, `buffers`: lax's while loop under `vmap` would select it whole at each step).
     ends = jnp.broadcast_to(flat, (samples, flat.size))
